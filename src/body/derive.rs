@@ -1,0 +1,380 @@
+//! Landmarks → feature curves, feature points and frames, on any mesh.
+//!
+//! The one path by which every body — a scan of any topology or the
+//! embedded mannequin — becomes a [`FeatureBody`]:
+//!
+//! 1. **Check** the mesh: stature (bounding-box height) within
+//!    [`DeriveOptions::min_stature_m`, `max_stature_m`]; every landmark the
+//!    vocabulary's curve rules need is present and finite.
+//! 2. **Snap** each landmark to its closest surface point; one farther than
+//!    [`DeriveOptions::max_landmark_offset_mm`] is rejected.
+//! 3. **Curves** (unless given as polylines): each curve by its rule in
+//!    [`vocab::CURVES`] — a *section* is a plane section of the mesh
+//!    ([`crate::geom::slice`]), the loop chosen as the one enclosing the
+//!    landmarks' centroid (torso girths: not an arm) or the one nearest to
+//!    them (limbs), oriented anticlockwise about the rule's axis; a *path*
+//!    joins consecutive landmarks `p_i → p_{i+1}` by the shorter arc of the
+//!    section by the plane through `p_i` with normal `(p_{i+1} − p_i) × d`.
+//! 4. **Points**: each feature point is the crossing of its two curves
+//!    nearest its landmark (closest approach of the polylines), snapped to
+//!    the surface. Crossings farther apart than
+//!    [`DeriveOptions::max_crossing_gap_mm`] are rejected.
+//! 5. **Frames** (seed 000 §3.2): `t(f1)`, `t(f2)` are the curves' chord
+//!    tangents over ±[`DeriveOptions::tangent_window_mm`], `n` the
+//!    area-weighted normal over a disc of [`DeriveOptions::normal_radius_mm`];
+//!    `|t(f1)·(t(f2)×n)| < min_frame_triple` is rejected, naming the point.
+
+use std::collections::BTreeMap;
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use super::feature::{FeatureBody, FeatureCurve, FeaturePoint, Frame};
+use super::vocab::{self, CurveId, CurveRule, LoopChoice, PlaneRule, PointId};
+use crate::geom::mesh::{MeshError, TriMesh};
+use crate::geom::plane::Plane;
+use crate::geom::polyline::Polyline;
+use crate::geom::query::{closest_point, disc_normal};
+use crate::geom::slice::slice;
+
+/// Millimetres per metre.
+pub const MM_PER_M: f64 = 1000.0;
+
+/// Landmark positions (and optionally curves) supplied with a body.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct Landmarks {
+    /// Feature point ID → approximate position, metres.
+    pub points: BTreeMap<PointId, DVec3>,
+    /// Feature curves given explicitly (polylines on the surface, metres);
+    /// the rest are derived.
+    #[serde(default)]
+    pub curves: BTreeMap<CurveId, Polyline>,
+}
+
+/// Knobs of the derivation.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct DeriveOptions {
+    /// Smallest accepted stature (bounding-box height), m. Default 0.5.
+    pub min_stature_m: f64,
+    /// Largest accepted stature, m. Default 2.5.
+    pub max_stature_m: f64,
+    /// Largest accepted distance from a landmark to the surface, mm. Default 30.
+    pub max_landmark_offset_mm: f64,
+    /// Half-width of the chord that defines a curve tangent, mm. Default 15.
+    pub tangent_window_mm: f64,
+    /// Radius of the disc over which the surface normal is averaged, mm. Default 15.
+    pub normal_radius_mm: f64,
+    /// Smallest accepted |t(f1)·(t(f2)×n)|. Default 0.1.
+    pub min_frame_triple: f64,
+    /// Largest accepted gap between two curves at their crossing, mm. Default 5.
+    pub max_crossing_gap_mm: f64,
+    /// How far below the armpit landmarks the chest girth is taken, mm. Default 25.
+    pub chest_below_armpit_mm: f64,
+    /// How far a path continues past its first and last landmark, mm, so
+    /// that a girth plane passing just beyond an end still crosses it.
+    /// Default 30.
+    pub path_extension_mm: f64,
+}
+
+impl Default for DeriveOptions {
+    fn default() -> Self {
+        Self {
+            min_stature_m: 0.5,
+            max_stature_m: 2.5,
+            max_landmark_offset_mm: 30.0,
+            tangent_window_mm: 15.0,
+            normal_radius_mm: 15.0,
+            min_frame_triple: 0.1,
+            max_crossing_gap_mm: 5.0,
+            chest_below_armpit_mm: 25.0,
+            path_extension_mm: 30.0,
+        }
+    }
+}
+
+/// Why a body could not be turned into a feature human model.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum FeatureError {
+    /// The mesh itself is invalid.
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+    /// Stature outside the accepted range (wrong units?).
+    #[error("the body is {stature_m} m tall; expected {min_m}–{max_m} m (are the units metres?)")]
+    BodySize {
+        /// Measured stature, m.
+        stature_m: f64,
+        /// Lower bound, m.
+        min_m: f64,
+        /// Upper bound, m.
+        max_m: f64,
+    },
+    /// Landmarks the curve rules need are missing.
+    #[error("missing landmarks: {}", .missing.iter().map(|p| p.as_str()).collect::<Vec<_>>().join(", "))]
+    MissingLandmarks {
+        /// The missing IDs.
+        missing: Vec<PointId>,
+    },
+    /// A landmark coordinate is not finite.
+    #[error("landmark `{point}` has a non-finite coordinate")]
+    NonFiniteLandmark {
+        /// The landmark.
+        point: PointId,
+    },
+    /// A landmark lies too far from the surface.
+    #[error("landmark `{point}` is {distance_mm:.1} mm from the body surface (limit {limit_mm} mm)")]
+    LandmarkOffSurface {
+        /// The landmark.
+        point: PointId,
+        /// Its distance to the surface, mm.
+        distance_mm: f64,
+        /// The limit, mm.
+        limit_mm: f64,
+    },
+    /// A given curve polyline is unusable.
+    #[error("curve `{curve}`: {reason}")]
+    BadCurve {
+        /// The curve.
+        curve: CurveId,
+        /// What is wrong.
+        reason: String,
+    },
+    /// The plane of a curve does not cut the body where its landmarks are.
+    #[error("curve `{curve}`: no section of the body {reason}")]
+    NoSection {
+        /// The curve.
+        curve: CurveId,
+        /// Where it was looked for.
+        reason: String,
+    },
+    /// Two curves that define a point do not meet.
+    #[error("curves `{f1}` and `{f2}` do not cross near `{point}`: closest {gap_mm:.1} mm apart")]
+    CurvesDoNotCross {
+        /// The point.
+        point: PointId,
+        /// First curve.
+        f1: CurveId,
+        /// Second curve.
+        f2: CurveId,
+        /// Their closest distance, mm.
+        gap_mm: f64,
+    },
+    /// The frame at a point is (nearly) degenerate.
+    #[error("degenerate frame at `{point}`: |t(f1)·(t(f2)×n)| = {triple:.3} < {min}")]
+    DegenerateFrame {
+        /// The point.
+        point: PointId,
+        /// The triple product.
+        triple: f64,
+        /// The threshold.
+        min: f64,
+    },
+}
+
+/// Builds the feature human model of `mesh` from `landmarks`.
+pub fn derive_features(
+    mesh: TriMesh,
+    landmarks: &Landmarks,
+    opts: &DeriveOptions,
+) -> Result<FeatureBody, FeatureError> {
+    let stature = mesh.aabb().size().y;
+    if !(stature >= opts.min_stature_m && stature <= opts.max_stature_m) {
+        return Err(FeatureError::BodySize { stature_m: stature, min_m: opts.min_stature_m, max_m: opts.max_stature_m });
+    }
+    // landmarks needed: those of the curves not given explicitly
+    let mut missing: Vec<PointId> = vocab::CURVES
+        .iter()
+        .filter(|c| !landmarks.curves.contains_key(&c.id))
+        .flat_map(|c| match c.rule {
+            CurveRule::Section { landmarks, .. } | CurveRule::Path { landmarks, .. } => landmarks.iter().copied(),
+        })
+        .filter(|p| !landmarks.points.contains_key(p))
+        .collect();
+    missing.sort();
+    missing.dedup();
+    if !missing.is_empty() {
+        return Err(FeatureError::MissingLandmarks { missing });
+    }
+    let mut snapped: BTreeMap<PointId, DVec3> = BTreeMap::new();
+    for (&id, &p) in &landmarks.points {
+        if !p.is_finite() {
+            return Err(FeatureError::NonFiniteLandmark { point: id });
+        }
+        let sp = closest_point(&mesh, p);
+        let mm = sp.distance * MM_PER_M;
+        if mm > opts.max_landmark_offset_mm {
+            return Err(FeatureError::LandmarkOffSurface {
+                point: id,
+                distance_mm: mm,
+                limit_mm: opts.max_landmark_offset_mm,
+            });
+        }
+        snapped.insert(id, sp.point);
+    }
+
+    let mut curves = BTreeMap::new();
+    for def in vocab::CURVES {
+        let curve = match landmarks.curves.get(&def.id) {
+            Some(given) => given_curve(def.id, given)?,
+            None => derive_curve(&mesh, def.id, &def.rule, &snapped, opts)?,
+        };
+        curves.insert(def.id, curve);
+    }
+
+    let mut points = BTreeMap::new();
+    let h = opts.tangent_window_mm / MM_PER_M;
+    for def in vocab::POINTS {
+        let c1 = &curves[&def.f1].polyline;
+        let c2 = &curves[&def.f2].polyline;
+        let near = snapped.get(&def.id).copied().unwrap_or_else(|| 0.5 * (c1.centroid() + c2.centroid()));
+        let gap_tol = 1e-9 * stature;
+        let cross = c1.crossing(c2, near, gap_tol).ok_or(FeatureError::CurvesDoNotCross {
+            point: def.id,
+            f1: def.f1,
+            f2: def.f2,
+            gap_mm: f64::INFINITY,
+        })?;
+        if cross.gap * MM_PER_M > opts.max_crossing_gap_mm {
+            return Err(FeatureError::CurvesDoNotCross {
+                point: def.id,
+                f1: def.f1,
+                f2: def.f2,
+                gap_mm: cross.gap * MM_PER_M,
+            });
+        }
+        let position = closest_point(&mesh, cross.point).point;
+        let degenerate = |triple: f64| FeatureError::DegenerateFrame { point: def.id, triple, min: opts.min_frame_triple };
+        let t1 = c1.tangent_at(cross.s_a, h).ok_or_else(|| degenerate(0.0))?;
+        let t2 = c2.tangent_at(cross.s_b, h).ok_or_else(|| degenerate(0.0))?;
+        let n = disc_normal(&mesh, position, opts.normal_radius_mm / MM_PER_M).ok_or_else(|| degenerate(0.0))?;
+        let frame = Frame { t1, t2, n };
+        let triple = frame.triple();
+        if !(triple.abs() >= opts.min_frame_triple) {
+            return Err(degenerate(triple));
+        }
+        points.insert(def.id, FeaturePoint { position, frame, crossing_gap: cross.gap });
+    }
+    Ok(FeatureBody { mesh, curves, points })
+}
+
+fn given_curve(id: CurveId, given: &Polyline) -> Result<FeatureCurve, FeatureError> {
+    if given.points.len() < 2 {
+        return Err(FeatureError::BadCurve { curve: id, reason: "fewer than 2 points".into() });
+    }
+    if given.points.iter().any(|p| !p.is_finite()) {
+        return Err(FeatureError::BadCurve { curve: id, reason: "non-finite coordinate".into() });
+    }
+    if given.length() <= 0.0 {
+        return Err(FeatureError::BadCurve { curve: id, reason: "zero length".into() });
+    }
+    Ok(FeatureCurve { polyline: given.clone(), plane: None })
+}
+
+fn mean(points: &[DVec3]) -> DVec3 {
+    points.iter().copied().sum::<DVec3>() / points.len().max(1) as f64
+}
+
+fn section_plane(curve: CurveId, rule: PlaneRule, pts: &[DVec3], opts: &DeriveOptions) -> Result<Plane, FeatureError> {
+    let c = mean(pts);
+    let horizontal = |y: f64| Plane { normal: DVec3::Y, offset: y };
+    let plane = match rule {
+        PlaneRule::BestFit => Plane::fit(pts).map(|p| p.oriented_towards(DVec3::Y)).unwrap_or(horizontal(c.y)),
+        PlaneRule::Horizontal => horizontal(c.y),
+        PlaneRule::HorizontalBelowArmpit => horizontal(c.y - opts.chest_below_armpit_mm / MM_PER_M),
+        PlaneRule::Containing(axis) => {
+            let (a, b) = match pts {
+                [a, b, ..] => (*a, *b),
+                _ => return Err(FeatureError::NoSection { curve, reason: "(rule needs two landmarks)".into() }),
+            };
+            Plane::from_point_normal(a, (b - a).cross(axis.vector())).ok_or_else(|| FeatureError::NoSection {
+                curve,
+                reason: "(its landmarks lie along the rule's axis)".into(),
+            })?
+        }
+        PlaneRule::Normal(axis) => Plane { normal: axis.vector(), offset: axis.vector().dot(pts[0]) },
+    };
+    Ok(plane)
+}
+
+fn derive_curve(
+    mesh: &TriMesh,
+    id: CurveId,
+    rule: &CurveRule,
+    snapped: &BTreeMap<PointId, DVec3>,
+    opts: &DeriveOptions,
+) -> Result<FeatureCurve, FeatureError> {
+    match *rule {
+        CurveRule::Section { landmarks, plane, choice, orientation } => {
+            let pts: Vec<DVec3> = landmarks.iter().map(|p| snapped[p]).collect();
+            let plane = section_plane(id, plane, &pts, opts)?;
+            let loops: Vec<Polyline> =
+                slice(mesh, &plane).into_iter().map(|s| s.polyline).filter(|p| p.points.len() >= 3).collect();
+            let centre = plane.project(mean(&pts));
+            let chosen = match choice {
+                LoopChoice::Encloses => loops
+                    .iter()
+                    .filter(|l| l.contains_projected(&plane, centre))
+                    .min_by(|a, b| a.length().total_cmp(&b.length())),
+                LoopChoice::Nearest => loops.iter().min_by(|a, b| {
+                    let da: f64 = pts.iter().filter_map(|p| a.closest(*p)).map(|c| c.distance).sum();
+                    let db: f64 = pts.iter().filter_map(|p| b.closest(*p)).map(|c| c.distance).sum();
+                    da.total_cmp(&db)
+                }),
+            };
+            let Some(chosen) = chosen else {
+                return Err(FeatureError::NoSection {
+                    curve: id,
+                    reason: format!("around its landmarks ({} loops in its plane)", loops.len()),
+                });
+            };
+            let mut poly = chosen.clone();
+            poly.closed = true;
+            if poly.signed_area(orientation.vector()) < 0.0 {
+                poly = poly.reversed();
+            }
+            Ok(FeatureCurve { polyline: poly, plane: Some(plane) })
+        }
+        CurveRule::Path { landmarks, depth } => {
+            let mut out: Vec<DVec3> = Vec::new();
+            let last = landmarks.len().saturating_sub(2);
+            let ext = opts.path_extension_mm / MM_PER_M;
+            for (k, pair) in landmarks.windows(2).enumerate() {
+                let (a, b) = (snapped[&pair[0]], snapped[&pair[1]]);
+                let extend = (if k == 0 { ext } else { 0.0 }, if k == last { ext } else { 0.0 });
+                let piece = path_piece(mesh, a, b, depth.vector(), extend).ok_or_else(|| FeatureError::NoSection {
+                    curve: id,
+                    reason: format!("from `{}` to `{}`", pair[0], pair[1]),
+                })?;
+                let skip = usize::from(!out.is_empty());
+                out.extend(piece.points.into_iter().skip(skip));
+            }
+            Ok(FeatureCurve { polyline: Polyline::new(out, false), plane: None })
+        }
+    }
+}
+
+/// The shorter arc from `a` to `b` of the section through `a` with normal
+/// `(b − a) × d`, on the loop nearest to both points, continued by
+/// `extend.0` before `a` and `extend.1` past `b` (m) along the same loop.
+fn path_piece(mesh: &TriMesh, a: DVec3, b: DVec3, d: DVec3, extend: (f64, f64)) -> Option<Polyline> {
+    let plane = Plane::from_point_normal(a, (b - a).cross(d))?;
+    let sections = slice(mesh, &plane);
+    let dist = |p: &Polyline, q: DVec3| p.closest(q).map_or(f64::INFINITY, |c| c.distance);
+    let best = sections
+        .iter()
+        .map(|s| &s.polyline)
+        .min_by(|x, y| (dist(x, a) + dist(x, b)).total_cmp(&(dist(y, a) + dist(y, b))))?;
+    let sa = best.closest(a)?.s;
+    let sb = best.closest(b)?.s;
+    let forward = if best.closed {
+        best.arc(sa, sb).length() <= best.arc(sb, sa).length()
+    } else {
+        sa <= sb
+    };
+    let arc = if forward {
+        best.arc(sa - extend.0, sb + extend.1)
+    } else {
+        best.arc(sb - extend.1, sa + extend.0).reversed()
+    };
+    Some(arc)
+}

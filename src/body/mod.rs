@@ -1,0 +1,6 @@
+//! Feature human models (seed 000 §3.1–3.2): body meshes with feature
+//! curves, feature points and local frames.
+
+pub mod derive;
+pub mod feature;
+pub mod vocab;

@@ -1,0 +1,539 @@
+//! The feature vocabulary: one versioned registry of feature curves and
+//! feature points, shared by bodies, templates and the API (seed 000 §3.1:
+//! "each semantic feature point is an intersection point of two semantic
+//! feature curves, and every semantic feature point has its own ID").
+//!
+//! IDs are stable snake_case strings; names follow ISO 8559-1:2017
+//! ("Size designation of clothes — Anthropometric definitions for body
+//! measurement") where it defines the landmark or girth.
+//!
+//! Each curve also carries the rule that derives it from landmark
+//! positions on any body mesh (see [`crate::body::derive`]):
+//! * a **section** is the closed loop cut by a plane through its landmarks
+//!   (best-fit plane, horizontal plane, or the plane through two landmarks
+//!   that contains a body axis);
+//! * a **path** runs through its landmarks in order; between consecutive
+//!   landmarks `p_i`, `p_{i+1}` it follows the section of the plane with
+//!   normal `(p_{i+1} − p_i) × d`, `d` the depth axis named by the rule
+//!   (Z, front–back, for centre lines; X, lateral, for side lines).
+//!
+//! Body axes: metres, Y up, the body faces +Z, so the body's left is +X.
+
+use std::fmt;
+use std::str::FromStr;
+
+use glam::DVec3;
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+/// Version of this registry. Bump when an ID is added, removed or changes
+/// meaning; templates and landmark files record the version they use.
+pub const VOCABULARY_VERSION: u32 = 1;
+
+macro_rules! id_enum {
+    ($(#[$doc:meta])* $name:ident { $($(#[$vdoc:meta])* $var:ident = $s:literal),+ $(,)? }) => {
+        $(#[$doc])*
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+        pub enum $name { $($(#[$vdoc])* $var),+ }
+        impl $name {
+            /// Every ID, in registry order.
+            pub const ALL: &'static [$name] = &[$($name::$var),+];
+            /// The stable string ID.
+            pub fn as_str(self) -> &'static str {
+                match self { $($name::$var => $s),+ }
+            }
+        }
+        impl fmt::Display for $name {
+            fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result { f.write_str(self.as_str()) }
+        }
+        impl FromStr for $name {
+            type Err = UnknownId;
+            fn from_str(s: &str) -> Result<Self, UnknownId> {
+                match s { $($s => Ok($name::$var),)+ _ => Err(UnknownId { kind: stringify!($name), id: s.to_owned() }) }
+            }
+        }
+        impl Serialize for $name {
+            fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> { s.serialize_str(self.as_str()) }
+        }
+        impl<'de> Deserialize<'de> for $name {
+            fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+                let s = String::deserialize(d)?;
+                s.parse().map_err(serde::de::Error::custom)
+            }
+        }
+    };
+}
+
+/// An ID that the vocabulary does not know.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown {kind} `{id}` (vocabulary version {VOCABULARY_VERSION})")]
+pub struct UnknownId {
+    /// Which kind of ID (`PointId`, `CurveId`, …).
+    pub kind: &'static str,
+    /// The string that was given.
+    pub id: String,
+}
+
+id_enum! {
+    /// A feature curve.
+    CurveId {
+        /// Neck base girth (ISO 8559-1 5.3.2): through the cervicale, the side neck points and the front neck point.
+        NeckBase = "neck_base",
+        /// Chest girth at armpit level (ISO 8559-1 5.3.4), under the arms.
+        Chest = "chest",
+        /// Bust girth (ISO 8559-1 5.3.5), horizontal over the bust points.
+        Bust = "bust",
+        /// Underbust girth (ISO 8559-1 5.3.6).
+        Underbust = "underbust",
+        /// Waist girth (ISO 8559-1 5.3.10), at the natural waist.
+        Waist = "waist",
+        /// Hip girth (ISO 8559-1 5.3.13), at the greatest buttock prominence.
+        Hip = "hip",
+        /// Left thigh girth (ISO 8559-1 5.3.20), just below the gluteal fold.
+        ThighLeft = "thigh_left",
+        /// Right thigh girth.
+        ThighRight = "thigh_right",
+        /// Left knee girth (ISO 8559-1 5.3.22).
+        KneeLeft = "knee_left",
+        /// Right knee girth.
+        KneeRight = "knee_right",
+        /// Left ankle girth (ISO 8559-1 5.3.24).
+        AnkleLeft = "ankle_left",
+        /// Right ankle girth.
+        AnkleRight = "ankle_right",
+        /// Left armscye (armhole) girth (ISO 8559-1 5.3.15): through the shoulder point and the armpit.
+        ArmscyeLeft = "armscye_left",
+        /// Right armscye girth.
+        ArmscyeRight = "armscye_right",
+        /// Centre front line: front neck point down the sagittal plane to the crotch.
+        CentreFront = "centre_front",
+        /// Centre back line: cervicale down the spine to the crotch.
+        CentreBack = "centre_back",
+        /// Left side line: armpit down the side of the torso and the outside of the leg to the ankle.
+        SideLineLeft = "side_line_left",
+        /// Right side line.
+        SideLineRight = "side_line_right",
+        /// Left shoulder line: side neck point to shoulder point over the top of the shoulder.
+        ShoulderLineLeft = "shoulder_line_left",
+        /// Right shoulder line.
+        ShoulderLineRight = "shoulder_line_right",
+        /// Crotch line: the front-view (coronal) section through the crotch point.
+        CrotchLine = "crotch_line",
+    }
+}
+
+id_enum! {
+    /// A feature point (also the landmark IDs accepted with a scan).
+    PointId {
+        /// Front neck point (ISO 8559-1 3.1.6).
+        NeckFront = "neck_front",
+        /// Back neck point, cervicale (ISO 8559-1 3.1.3).
+        NeckBack = "neck_back",
+        /// Left side neck point (ISO 8559-1 3.1.5).
+        NeckLeft = "neck_left",
+        /// Right side neck point.
+        NeckRight = "neck_right",
+        /// Left shoulder point, acromion (ISO 8559-1 3.1.1).
+        ShoulderLeft = "shoulder_left",
+        /// Right shoulder point.
+        ShoulderRight = "shoulder_right",
+        /// Left armpit point on the side line, at chest level (ISO 8559-1 3.1.11).
+        UnderarmLeft = "underarm_left",
+        /// Right armpit point.
+        UnderarmRight = "underarm_right",
+        /// Chest girth at centre front.
+        ChestFront = "chest_front",
+        /// Chest girth at centre back.
+        ChestBack = "chest_back",
+        /// Bust girth at centre front.
+        BustFront = "bust_front",
+        /// Bust girth at centre back.
+        BustBack = "bust_back",
+        /// Bust girth at the left side line.
+        BustLeft = "bust_left",
+        /// Bust girth at the right side line.
+        BustRight = "bust_right",
+        /// Underbust girth at centre front.
+        UnderbustFront = "underbust_front",
+        /// Underbust girth at centre back.
+        UnderbustBack = "underbust_back",
+        /// Underbust girth at the left side line.
+        UnderbustLeft = "underbust_left",
+        /// Underbust girth at the right side line.
+        UnderbustRight = "underbust_right",
+        /// Waist girth at centre front.
+        WaistFront = "waist_front",
+        /// Waist girth at centre back.
+        WaistBack = "waist_back",
+        /// Waist girth at the left side line.
+        WaistLeft = "waist_left",
+        /// Waist girth at the right side line.
+        WaistRight = "waist_right",
+        /// Hip girth at centre front.
+        HipFront = "hip_front",
+        /// Hip girth at centre back.
+        HipBack = "hip_back",
+        /// Hip girth at the left side line.
+        HipLeft = "hip_left",
+        /// Hip girth at the right side line.
+        HipRight = "hip_right",
+        /// Crotch point (ISO 8559-1 3.1.15).
+        Crotch = "crotch",
+        /// Left thigh girth at the side line.
+        ThighLeft = "thigh_left",
+        /// Right thigh girth at the side line.
+        ThighRight = "thigh_right",
+        /// Left knee girth at the side line.
+        KneeLeft = "knee_left",
+        /// Right knee girth at the side line.
+        KneeRight = "knee_right",
+        /// Left ankle girth at the side line.
+        AnkleLeft = "ankle_left",
+        /// Right ankle girth at the side line.
+        AnkleRight = "ankle_right",
+    }
+}
+
+/// A body axis used by curve rules.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Axis {
+    /// Lateral, towards the body's left.
+    X,
+    /// Up.
+    Y,
+    /// Forward.
+    Z,
+    /// Towards the body's right.
+    NegX,
+}
+
+impl Axis {
+    /// The unit vector.
+    pub fn vector(self) -> DVec3 {
+        match self {
+            Axis::X => DVec3::X,
+            Axis::Y => DVec3::Y,
+            Axis::Z => DVec3::Z,
+            Axis::NegX => DVec3::NEG_X,
+        }
+    }
+}
+
+/// How a section's plane is found from its landmarks.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PlaneRule {
+    /// Least-squares plane through the landmarks, its normal turned
+    /// towards +Y; horizontal through their mean if they span no plane.
+    BestFit,
+    /// Horizontal through the landmarks' mean height, lowered by the
+    /// derivation option `chest_below_armpit_mm` (used for the chest).
+    HorizontalBelowArmpit,
+    /// Horizontal through the landmarks' mean height.
+    Horizontal,
+    /// Through the first two landmarks and containing the axis.
+    Containing(Axis),
+    /// Through the (first) landmark with this normal.
+    Normal(Axis),
+}
+
+/// Which loop of a plane section is the curve.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LoopChoice {
+    /// The loop that encloses the landmarks' centroid (torso girths).
+    Encloses,
+    /// The loop nearest to the landmarks (limbs, armholes).
+    Nearest,
+}
+
+/// How a curve is derived from landmarks.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum CurveRule {
+    /// A closed plane section.
+    Section {
+        /// Landmarks the plane is fitted to.
+        landmarks: &'static [PointId],
+        /// How the plane is found.
+        plane: PlaneRule,
+        /// Which loop is kept.
+        choice: LoopChoice,
+        /// The loop runs anticlockwise seen from the tip of this axis.
+        orientation: Axis,
+    },
+    /// An open path through landmarks, in order.
+    Path {
+        /// The landmarks, first to last.
+        landmarks: &'static [PointId],
+        /// Depth axis `d`: each piece lies in the plane spanned by the
+        /// chord and `d`.
+        depth: Axis,
+    },
+}
+
+/// Registry entry of a curve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CurveDef {
+    /// ID.
+    pub id: CurveId,
+    /// Human-readable name.
+    pub name: &'static str,
+    /// Derivation rule.
+    pub rule: CurveRule,
+}
+
+/// Registry entry of a point: the crossing of two curves.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PointDef {
+    /// ID.
+    pub id: PointId,
+    /// Human-readable name.
+    pub name: &'static str,
+    /// First curve `f1` (its tangent is `t(f1)` in Eq. (1)).
+    pub f1: CurveId,
+    /// Second curve `f2`.
+    pub f2: CurveId,
+}
+
+use PointId as P;
+
+const fn girth4(f: P, b: P, l: P, r: P) -> [P; 4] {
+    [f, b, l, r]
+}
+const NECK: [P; 4] = girth4(P::NeckFront, P::NeckBack, P::NeckLeft, P::NeckRight);
+const BUST: [P; 4] = girth4(P::BustFront, P::BustBack, P::BustLeft, P::BustRight);
+const UNDERBUST: [P; 4] = girth4(P::UnderbustFront, P::UnderbustBack, P::UnderbustLeft, P::UnderbustRight);
+const WAIST: [P; 4] = girth4(P::WaistFront, P::WaistBack, P::WaistLeft, P::WaistRight);
+const HIP: [P; 4] = girth4(P::HipFront, P::HipBack, P::HipLeft, P::HipRight);
+
+const fn section(landmarks: &'static [P], plane: PlaneRule, choice: LoopChoice, orientation: Axis) -> CurveRule {
+    CurveRule::Section { landmarks, plane, choice, orientation }
+}
+
+/// Every curve of vocabulary version [`VOCABULARY_VERSION`].
+pub const CURVES: &[CurveDef] = &[
+    CurveDef {
+        id: CurveId::NeckBase,
+        name: "neck base girth",
+        rule: section(&NECK, PlaneRule::BestFit, LoopChoice::Encloses, Axis::Y),
+    },
+    CurveDef {
+        id: CurveId::Chest,
+        name: "chest girth",
+        rule: section(&[P::UnderarmLeft, P::UnderarmRight], PlaneRule::HorizontalBelowArmpit, LoopChoice::Encloses, Axis::Y),
+    },
+    CurveDef { id: CurveId::Bust, name: "bust girth", rule: section(&BUST, PlaneRule::BestFit, LoopChoice::Encloses, Axis::Y) },
+    CurveDef {
+        id: CurveId::Underbust,
+        name: "underbust girth",
+        rule: section(&UNDERBUST, PlaneRule::BestFit, LoopChoice::Encloses, Axis::Y),
+    },
+    CurveDef { id: CurveId::Waist, name: "waist girth", rule: section(&WAIST, PlaneRule::BestFit, LoopChoice::Encloses, Axis::Y) },
+    CurveDef { id: CurveId::Hip, name: "hip girth", rule: section(&HIP, PlaneRule::BestFit, LoopChoice::Encloses, Axis::Y) },
+    CurveDef {
+        id: CurveId::ThighLeft,
+        name: "left thigh girth",
+        rule: section(&[P::ThighLeft], PlaneRule::Horizontal, LoopChoice::Nearest, Axis::Y),
+    },
+    CurveDef {
+        id: CurveId::ThighRight,
+        name: "right thigh girth",
+        rule: section(&[P::ThighRight], PlaneRule::Horizontal, LoopChoice::Nearest, Axis::Y),
+    },
+    CurveDef {
+        id: CurveId::KneeLeft,
+        name: "left knee girth",
+        rule: section(&[P::KneeLeft], PlaneRule::Horizontal, LoopChoice::Nearest, Axis::Y),
+    },
+    CurveDef {
+        id: CurveId::KneeRight,
+        name: "right knee girth",
+        rule: section(&[P::KneeRight], PlaneRule::Horizontal, LoopChoice::Nearest, Axis::Y),
+    },
+    CurveDef {
+        id: CurveId::AnkleLeft,
+        name: "left ankle girth",
+        rule: section(&[P::AnkleLeft], PlaneRule::Horizontal, LoopChoice::Nearest, Axis::Y),
+    },
+    CurveDef {
+        id: CurveId::AnkleRight,
+        name: "right ankle girth",
+        rule: section(&[P::AnkleRight], PlaneRule::Horizontal, LoopChoice::Nearest, Axis::Y),
+    },
+    CurveDef {
+        id: CurveId::ArmscyeLeft,
+        name: "left armscye girth",
+        rule: section(&[P::ShoulderLeft, P::UnderarmLeft], PlaneRule::Containing(Axis::Z), LoopChoice::Nearest, Axis::X),
+    },
+    CurveDef {
+        id: CurveId::ArmscyeRight,
+        name: "right armscye girth",
+        rule: section(&[P::ShoulderRight, P::UnderarmRight], PlaneRule::Containing(Axis::Z), LoopChoice::Nearest, Axis::NegX),
+    },
+    CurveDef {
+        id: CurveId::CentreFront,
+        name: "centre front line",
+        rule: CurveRule::Path {
+            landmarks: &[P::NeckFront, P::BustFront, P::UnderbustFront, P::WaistFront, P::HipFront, P::Crotch],
+            depth: Axis::Z,
+        },
+    },
+    CurveDef {
+        id: CurveId::CentreBack,
+        name: "centre back line",
+        rule: CurveRule::Path {
+            landmarks: &[P::NeckBack, P::BustBack, P::UnderbustBack, P::WaistBack, P::HipBack, P::Crotch],
+            depth: Axis::Z,
+        },
+    },
+    CurveDef {
+        id: CurveId::SideLineLeft,
+        name: "left side line",
+        rule: CurveRule::Path {
+            landmarks: &[
+                P::UnderarmLeft,
+                P::BustLeft,
+                P::UnderbustLeft,
+                P::WaistLeft,
+                P::HipLeft,
+                P::ThighLeft,
+                P::KneeLeft,
+                P::AnkleLeft,
+            ],
+            depth: Axis::X,
+        },
+    },
+    CurveDef {
+        id: CurveId::SideLineRight,
+        name: "right side line",
+        rule: CurveRule::Path {
+            landmarks: &[
+                P::UnderarmRight,
+                P::BustRight,
+                P::UnderbustRight,
+                P::WaistRight,
+                P::HipRight,
+                P::ThighRight,
+                P::KneeRight,
+                P::AnkleRight,
+            ],
+            depth: Axis::X,
+        },
+    },
+    CurveDef {
+        id: CurveId::ShoulderLineLeft,
+        name: "left shoulder line",
+        rule: CurveRule::Path { landmarks: &[P::NeckLeft, P::ShoulderLeft], depth: Axis::Y },
+    },
+    CurveDef {
+        id: CurveId::ShoulderLineRight,
+        name: "right shoulder line",
+        rule: CurveRule::Path { landmarks: &[P::NeckRight, P::ShoulderRight], depth: Axis::Y },
+    },
+    CurveDef {
+        id: CurveId::CrotchLine,
+        name: "crotch line",
+        rule: section(&[P::Crotch], PlaneRule::Normal(Axis::Z), LoopChoice::Nearest, Axis::Z),
+    },
+];
+
+const fn pt(id: P, name: &'static str, f1: CurveId, f2: CurveId) -> PointDef {
+    PointDef { id, name, f1, f2 }
+}
+
+/// Every feature point of vocabulary version [`VOCABULARY_VERSION`].
+pub const POINTS: &[PointDef] = &[
+    pt(P::NeckFront, "front neck point", CurveId::NeckBase, CurveId::CentreFront),
+    pt(P::NeckBack, "back neck point (cervicale)", CurveId::NeckBase, CurveId::CentreBack),
+    pt(P::NeckLeft, "left side neck point", CurveId::NeckBase, CurveId::ShoulderLineLeft),
+    pt(P::NeckRight, "right side neck point", CurveId::NeckBase, CurveId::ShoulderLineRight),
+    pt(P::ShoulderLeft, "left shoulder point (acromion)", CurveId::ShoulderLineLeft, CurveId::ArmscyeLeft),
+    pt(P::ShoulderRight, "right shoulder point (acromion)", CurveId::ShoulderLineRight, CurveId::ArmscyeRight),
+    pt(P::UnderarmLeft, "left armpit point", CurveId::Chest, CurveId::SideLineLeft),
+    pt(P::UnderarmRight, "right armpit point", CurveId::Chest, CurveId::SideLineRight),
+    pt(P::ChestFront, "chest front point", CurveId::Chest, CurveId::CentreFront),
+    pt(P::ChestBack, "chest back point", CurveId::Chest, CurveId::CentreBack),
+    pt(P::BustFront, "bust front point", CurveId::Bust, CurveId::CentreFront),
+    pt(P::BustBack, "bust back point", CurveId::Bust, CurveId::CentreBack),
+    pt(P::BustLeft, "bust left side point", CurveId::Bust, CurveId::SideLineLeft),
+    pt(P::BustRight, "bust right side point", CurveId::Bust, CurveId::SideLineRight),
+    pt(P::UnderbustFront, "underbust front point", CurveId::Underbust, CurveId::CentreFront),
+    pt(P::UnderbustBack, "underbust back point", CurveId::Underbust, CurveId::CentreBack),
+    pt(P::UnderbustLeft, "underbust left side point", CurveId::Underbust, CurveId::SideLineLeft),
+    pt(P::UnderbustRight, "underbust right side point", CurveId::Underbust, CurveId::SideLineRight),
+    pt(P::WaistFront, "front waist point", CurveId::Waist, CurveId::CentreFront),
+    pt(P::WaistBack, "back waist point", CurveId::Waist, CurveId::CentreBack),
+    pt(P::WaistLeft, "left side waist point", CurveId::Waist, CurveId::SideLineLeft),
+    pt(P::WaistRight, "right side waist point", CurveId::Waist, CurveId::SideLineRight),
+    pt(P::HipFront, "front hip point", CurveId::Hip, CurveId::CentreFront),
+    pt(P::HipBack, "back hip point", CurveId::Hip, CurveId::CentreBack),
+    pt(P::HipLeft, "left side hip point", CurveId::Hip, CurveId::SideLineLeft),
+    pt(P::HipRight, "right side hip point", CurveId::Hip, CurveId::SideLineRight),
+    pt(P::Crotch, "crotch point", CurveId::CentreFront, CurveId::CrotchLine),
+    pt(P::ThighLeft, "left thigh side point", CurveId::ThighLeft, CurveId::SideLineLeft),
+    pt(P::ThighRight, "right thigh side point", CurveId::ThighRight, CurveId::SideLineRight),
+    pt(P::KneeLeft, "left knee side point", CurveId::KneeLeft, CurveId::SideLineLeft),
+    pt(P::KneeRight, "right knee side point", CurveId::KneeRight, CurveId::SideLineRight),
+    pt(P::AnkleLeft, "left ankle side point", CurveId::AnkleLeft, CurveId::SideLineLeft),
+    pt(P::AnkleRight, "right ankle side point", CurveId::AnkleRight, CurveId::SideLineRight),
+];
+
+/// The registry entry of a curve.
+pub fn curve_def(id: CurveId) -> &'static CurveDef {
+    // CURVES is in CurveId order (checked by a test).
+    &CURVES[id as usize]
+}
+
+/// The registry entry of a point.
+pub fn point_def(id: PointId) -> &'static PointDef {
+    &POINTS[id as usize]
+}
+
+/// The landmarks a scan must provide: every landmark named by a curve rule.
+pub fn required_landmarks() -> Vec<PointId> {
+    let mut out: Vec<PointId> = CURVES
+        .iter()
+        .flat_map(|c| match c.rule {
+            CurveRule::Section { landmarks, .. } | CurveRule::Path { landmarks, .. } => landmarks.iter().copied(),
+        })
+        .collect();
+    out.sort();
+    out.dedup();
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn registry_is_in_id_order_and_round_trips() {
+        for (i, c) in CURVES.iter().enumerate() {
+            assert_eq!(c.id as usize, i, "{}", c.id);
+            assert_eq!(c.id.as_str().parse::<CurveId>().unwrap(), c.id);
+        }
+        assert_eq!(CURVES.len(), CurveId::ALL.len());
+        for (i, p) in POINTS.iter().enumerate() {
+            assert_eq!(p.id as usize, i, "{}", p.id);
+            assert_eq!(p.id.as_str().parse::<PointId>().unwrap(), p.id);
+            assert_ne!(p.f1, p.f2);
+        }
+        assert_eq!(POINTS.len(), PointId::ALL.len());
+    }
+
+    #[test]
+    fn every_point_is_a_landmark_of_its_curves_or_a_crossing() {
+        // Each point's two curves exist, and the landmarks needed cover
+        // every point except the chest front/back crossings.
+        let req = required_landmarks();
+        for p in PointId::ALL {
+            if !matches!(p, P::ChestFront | P::ChestBack) {
+                assert!(req.contains(p), "{p} is not a landmark");
+            }
+        }
+    }
+
+    #[test]
+    fn unknown_ids_are_named() {
+        let e = "waist_middle".parse::<PointId>().unwrap_err();
+        assert_eq!(e.id, "waist_middle");
+        assert!(e.to_string().contains("waist_middle"));
+    }
+}

@@ -1,0 +1,335 @@
+//! Indexed triangle meshes with typed indices and validation.
+//!
+//! Contract: a [`TriMesh`] built by [`TriMesh::new`] has at least one
+//! triangle, only finite coordinates, every index in range and no triangle
+//! that repeats a vertex. Zero-area triangles are allowed (scans have them);
+//! every computation here weights by area, so they contribute nothing.
+//! Units are whatever the caller uses; the body layer works in metres.
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+/// Index of a vertex in a [`TriMesh`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+pub struct VertexId(pub u32);
+
+/// Index of a triangle in a [`TriMesh`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+pub struct FaceId(pub u32);
+
+impl VertexId {
+    /// The index as `usize`.
+    #[inline]
+    pub fn idx(self) -> usize {
+        self.0 as usize
+    }
+}
+
+impl FaceId {
+    /// The index as `usize`.
+    #[inline]
+    pub fn idx(self) -> usize {
+        self.0 as usize
+    }
+}
+
+/// What is wrong with a mesh handed to [`TriMesh::new`].
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum MeshError {
+    /// No vertices or no triangles.
+    #[error("the mesh is empty ({vertices} vertices, {triangles} triangles)")]
+    Empty {
+        /// Number of vertices given.
+        vertices: usize,
+        /// Number of triangles given.
+        triangles: usize,
+    },
+    /// A coordinate is NaN or infinite.
+    #[error("vertex {vertex} has a non-finite coordinate")]
+    NonFinite {
+        /// The offending vertex.
+        vertex: u32,
+    },
+    /// A triangle names a vertex that does not exist.
+    #[error("triangle {face} refers to vertex {index}, but the mesh has only {count} vertices")]
+    IndexOutOfRange {
+        /// The offending triangle.
+        face: u32,
+        /// The index it holds.
+        index: u64,
+        /// Number of vertices.
+        count: usize,
+    },
+    /// A triangle uses the same vertex twice.
+    #[error("triangle {face} repeats vertex {vertex}")]
+    RepeatedVertex {
+        /// The offending triangle.
+        face: u32,
+        /// The repeated vertex.
+        vertex: u32,
+    },
+    /// More vertices or triangles than a `u32` index can hold.
+    #[error("the mesh has too many elements ({count}) for 32-bit indices")]
+    TooLarge {
+        /// The element count.
+        count: usize,
+    },
+}
+
+/// An indexed triangle mesh. Immutable once validated.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TriMesh {
+    positions: Vec<DVec3>,
+    triangles: Vec<[VertexId; 3]>,
+}
+
+/// Axis-aligned bounding box.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Aabb {
+    /// Lower corner.
+    pub min: DVec3,
+    /// Upper corner.
+    pub max: DVec3,
+}
+
+impl Aabb {
+    /// Extent along each axis.
+    pub fn size(&self) -> DVec3 {
+        self.max - self.min
+    }
+    /// Length of the diagonal.
+    pub fn diagonal(&self) -> f64 {
+        self.size().length()
+    }
+    /// Centre point.
+    pub fn centre(&self) -> DVec3 {
+        0.5 * (self.min + self.max)
+    }
+}
+
+impl TriMesh {
+    /// Validates and builds a mesh from raw positions and raw indices.
+    ///
+    /// Indices are `u64` so that out-of-range values from any source can be
+    /// reported rather than truncated.
+    pub fn from_raw(positions: Vec<DVec3>, triangles: &[[u64; 3]]) -> Result<Self, MeshError> {
+        let n = positions.len();
+        let mut tris = Vec::with_capacity(triangles.len());
+        for (f, t) in triangles.iter().enumerate() {
+            let face = u32::try_from(f).map_err(|_| MeshError::TooLarge { count: triangles.len() })?;
+            let mut ids = [VertexId(0); 3];
+            for (k, &i) in t.iter().enumerate() {
+                if i >= n as u64 {
+                    return Err(MeshError::IndexOutOfRange { face, index: i, count: n });
+                }
+                ids[k] = VertexId(i as u32);
+            }
+            tris.push(ids);
+        }
+        Self::new(positions, tris)
+    }
+
+    /// Validates and builds a mesh.
+    pub fn new(positions: Vec<DVec3>, triangles: Vec<[VertexId; 3]>) -> Result<Self, MeshError> {
+        if positions.is_empty() || triangles.is_empty() {
+            return Err(MeshError::Empty { vertices: positions.len(), triangles: triangles.len() });
+        }
+        if positions.len() > u32::MAX as usize || triangles.len() > u32::MAX as usize {
+            return Err(MeshError::TooLarge { count: positions.len().max(triangles.len()) });
+        }
+        if let Some(v) = positions.iter().position(|p| !p.is_finite()) {
+            return Err(MeshError::NonFinite { vertex: v as u32 });
+        }
+        let n = positions.len();
+        for (f, t) in triangles.iter().enumerate() {
+            for v in t {
+                if v.idx() >= n {
+                    return Err(MeshError::IndexOutOfRange { face: f as u32, index: u64::from(v.0), count: n });
+                }
+            }
+            if t[0] == t[1] || t[0] == t[2] {
+                return Err(MeshError::RepeatedVertex { face: f as u32, vertex: t[0].0 });
+            }
+            if t[1] == t[2] {
+                return Err(MeshError::RepeatedVertex { face: f as u32, vertex: t[1].0 });
+            }
+        }
+        Ok(Self { positions, triangles })
+    }
+
+    /// Vertex positions.
+    pub fn positions(&self) -> &[DVec3] {
+        &self.positions
+    }
+
+    /// Triangles as vertex triples (counter-clockwise seen from outside).
+    pub fn triangles(&self) -> &[[VertexId; 3]] {
+        &self.triangles
+    }
+
+    /// Number of vertices.
+    pub fn vertex_count(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// Number of triangles.
+    pub fn face_count(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// Position of a vertex.
+    #[inline]
+    pub fn position(&self, v: VertexId) -> DVec3 {
+        self.positions[v.idx()]
+    }
+
+    /// The three corner positions of a triangle.
+    #[inline]
+    pub fn corners(&self, f: FaceId) -> [DVec3; 3] {
+        let t = self.triangles[f.idx()];
+        [self.position(t[0]), self.position(t[1]), self.position(t[2])]
+    }
+
+    /// Twice the area vector of a triangle: `(b − a) × (c − a)`.
+    #[inline]
+    pub fn face_area_vector(&self, f: FaceId) -> DVec3 {
+        let [a, b, c] = self.corners(f);
+        (b - a).cross(c - a)
+    }
+
+    /// Bounding box of all vertices.
+    pub fn aabb(&self) -> Aabb {
+        let mut min = DVec3::splat(f64::INFINITY);
+        let mut max = DVec3::splat(f64::NEG_INFINITY);
+        for p in &self.positions {
+            min = min.min(*p);
+            max = max.max(*p);
+        }
+        Aabb { min, max }
+    }
+
+    /// Total surface area.
+    pub fn area(&self) -> f64 {
+        (0..self.triangles.len()).map(|f| 0.5 * self.face_area_vector(FaceId(f as u32)).length()).sum()
+    }
+
+    /// Area-weighted unit vertex normals (zero for isolated vertices).
+    pub fn vertex_normals(&self) -> Vec<DVec3> {
+        let mut n = vec![DVec3::ZERO; self.positions.len()];
+        for (f, t) in self.triangles.iter().enumerate() {
+            let a = self.face_area_vector(FaceId(f as u32));
+            for v in t {
+                n[v.idx()] += a;
+            }
+        }
+        for x in &mut n {
+            *x = x.normalize_or_zero();
+        }
+        n
+    }
+
+    /// Returns the mesh with every position mapped by `f` (validated again).
+    pub fn map_positions(&self, f: impl Fn(DVec3) -> DVec3) -> Result<Self, MeshError> {
+        Self::new(self.positions.iter().map(|&p| f(p)).collect(), self.triangles.clone())
+    }
+
+    /// Merges vertices closer than `tolerance` (grid hashing; exact
+    /// duplicates always merge) and drops triangles that collapse.
+    /// Scans often arrive with vertices split along UV or normal seams; the
+    /// slicer needs them welded to chain sections across such seams.
+    pub fn welded(&self, tolerance: f64) -> Result<Self, MeshError> {
+        use std::collections::HashMap;
+        let cell = tolerance.max(f64::MIN_POSITIVE);
+        let key = |p: DVec3| -> [i64; 3] {
+            let q = (p / cell).floor();
+            [q.x as i64, q.y as i64, q.z as i64]
+        };
+        let mut grid: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
+        let mut remap = vec![0u32; self.positions.len()];
+        let mut out: Vec<DVec3> = Vec::with_capacity(self.positions.len());
+        for (i, &p) in self.positions.iter().enumerate() {
+            let k = key(p);
+            let mut found = None;
+            'search: for dx in -1..=1 {
+                for dy in -1..=1 {
+                    for dz in -1..=1 {
+                        if let Some(list) = grid.get(&[k[0] + dx, k[1] + dy, k[2] + dz]) {
+                            for &j in list {
+                                if out[j as usize].distance(p) <= tolerance {
+                                    found = Some(j);
+                                    break 'search;
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+            let id = match found {
+                Some(j) => j,
+                None => {
+                    let j = out.len() as u32;
+                    out.push(p);
+                    grid.entry(k).or_default().push(j);
+                    j
+                }
+            };
+            remap[i] = id;
+        }
+        let tris: Vec<[VertexId; 3]> = self
+            .triangles
+            .iter()
+            .map(|t| t.map(|v| VertexId(remap[v.idx()])))
+            .filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
+            .collect();
+        Self::new(out, tris)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tet() -> TriMesh {
+        TriMesh::from_raw(
+            vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z],
+            &[[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn rejects_bad_input_with_named_element() {
+        assert!(matches!(TriMesh::from_raw(vec![], &[]), Err(MeshError::Empty { .. })));
+        let e = TriMesh::from_raw(vec![DVec3::ZERO, DVec3::X, DVec3::Y], &[[0, 1, 7]]).unwrap_err();
+        assert_eq!(e, MeshError::IndexOutOfRange { face: 0, index: 7, count: 3 });
+        let e = TriMesh::from_raw(vec![DVec3::ZERO, DVec3::new(f64::NAN, 0.0, 0.0), DVec3::Y], &[[0, 1, 2]])
+            .unwrap_err();
+        assert_eq!(e, MeshError::NonFinite { vertex: 1 });
+        let e = TriMesh::from_raw(vec![DVec3::ZERO, DVec3::X, DVec3::Y], &[[0, 1, 1]]).unwrap_err();
+        assert_eq!(e, MeshError::RepeatedVertex { face: 0, vertex: 1 });
+    }
+
+    #[test]
+    fn tetrahedron_area_and_outward_normals() {
+        let m = tet();
+        let expected = 1.5 + 3f64.sqrt() / 2.0;
+        assert!((m.area() - expected).abs() < 1e-12);
+        let n = m.vertex_normals();
+        // vertex 3 = (0,0,1): its normal points away from the centroid
+        let c = DVec3::splat(0.25);
+        assert!(n[3].dot(DVec3::Z - c) > 0.0);
+    }
+
+    #[test]
+    fn weld_merges_split_seams() {
+        // two triangles sharing an edge, stored unwelded
+        let m = TriMesh::from_raw(
+            vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::X, DVec3::Y, DVec3::ONE],
+            &[[0, 1, 2], [3, 5, 4]],
+        )
+        .unwrap();
+        let w = m.welded(1e-9).unwrap();
+        assert_eq!(w.vertex_count(), 4);
+        assert_eq!(w.face_count(), 2);
+    }
+}

@@ -1,0 +1,8 @@
+//! Geometry kernel: meshes, planes, polylines, plane sections, proximity
+//! queries and simplification. Pure functions on plain data.
+
+pub mod mesh;
+pub mod plane;
+pub mod polyline;
+pub mod query;
+pub mod slice;

@@ -1,0 +1,2 @@
+//! Parsing and writing of external formats (glTF, landmark JSON).
+//! Every reader validates and returns typed errors; none panics on input.

@@ -1,0 +1,173 @@
+//! Landmarks of an hm08 body, found on its own geometry.
+//!
+//! MakeHuman's measurement rings (`measures.json`) are girth lines drawn
+//! on the hm08 topology; they follow the body under every target. From
+//! them, on any hm08 body:
+//! * girth points: where a ring crosses the sagittal plane x = 0 (front:
+//!   larger z, back: smaller z) and the coronal plane through its centroid
+//!   (left: larger x — the body's left is +X — right: smaller x);
+//! * limb points: the outer crossing of the thigh, knee and ankle rings
+//!   with the coronal plane through their centroids (the rings are on the
+//!   left leg; the right leg's are their mirror images, `hm08.mirror`);
+//! * shoulder points: the lateral vertex of MakeHuman's `shoulder-dist`
+//!   measure (the acromion) and its mirror;
+//! * crotch: the lowest vertex on the sagittal plane (its own mirror);
+//! * armpits: on the coronal section through the upper-arm ring, walking
+//!   up the torso's side from bust height, the first local maximum of
+//!   height (where the torso's side meets the underside of the arm).
+//!
+//! Failure modes: a ring that does not cross its plane (a corrupt model)
+//! gives [`LandmarkError`] naming the ring.
+
+use glam::DVec3;
+
+use super::model::BodyModel;
+use crate::body::derive::Landmarks;
+use crate::body::vocab::PointId;
+use crate::geom::mesh::{TriMesh, VertexId};
+use crate::geom::plane::Plane;
+use crate::geom::polyline::Polyline;
+use crate::geom::slice::slice;
+
+/// A landmark that could not be found on an hm08 body.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("hm08 landmark `{point}` not found: {reason}")]
+pub struct LandmarkError {
+    /// The landmark.
+    pub point: PointId,
+    /// Why.
+    pub reason: String,
+}
+
+fn ring(mesh: &TriMesh, ids: impl IntoIterator<Item = VertexId>) -> Polyline {
+    let mut pts: Vec<DVec3> = Vec::new();
+    for v in ids {
+        let p = mesh.position(v);
+        if pts.last() != Some(&p) {
+            pts.push(p);
+        }
+    }
+    if pts.len() > 1 && pts.first() == pts.last() {
+        pts.pop();
+    }
+    Polyline::new(pts, true)
+}
+
+/// Points where a closed polyline crosses a plane.
+fn plane_crossings(poly: &Polyline, plane: &Plane) -> Vec<DVec3> {
+    let mut out = Vec::new();
+    for i in 0..poly.segment_count() {
+        let (a, b) = poly.segment(i);
+        let (da, db) = (plane.signed_distance(a), plane.signed_distance(b));
+        if (da >= 0.0) != (db >= 0.0) {
+            out.push(a.lerp(b, da / (da - db)));
+        }
+    }
+    out
+}
+
+fn extreme(points: &[DVec3], key: impl Fn(DVec3) -> f64) -> Option<DVec3> {
+    points.iter().copied().max_by(|a, b| key(*a).total_cmp(&key(*b)))
+}
+
+/// The landmarks of an hm08 body (a mesh built by [`BodyModel::build`]).
+pub fn hm08_landmarks(model: &BodyModel, mesh: &TriMesh) -> Result<Landmarks, LandmarkError> {
+    let data = model.data();
+    let ring_ids = |name: &str| -> Vec<VertexId> {
+        data.rings.get(name).map(|r| r.iter().map(|&v| VertexId(u32::from(v))).collect()).unwrap_or_default()
+    };
+    let err = |point: PointId, reason: &str| LandmarkError { point, reason: reason.to_owned() };
+    let mut lm = Landmarks::default();
+    let sagittal = Plane { normal: DVec3::X, offset: 0.0 };
+
+    let girths = [
+        ("neck-circ", [PointId::NeckFront, PointId::NeckBack, PointId::NeckLeft, PointId::NeckRight]),
+        ("bust-circ", [PointId::BustFront, PointId::BustBack, PointId::BustLeft, PointId::BustRight]),
+        ("underbust-circ", [PointId::UnderbustFront, PointId::UnderbustBack, PointId::UnderbustLeft, PointId::UnderbustRight]),
+        ("waist-circ", [PointId::WaistFront, PointId::WaistBack, PointId::WaistLeft, PointId::WaistRight]),
+        ("hips-circ", [PointId::HipFront, PointId::HipBack, PointId::HipLeft, PointId::HipRight]),
+    ];
+    for (name, [front, back, left, right]) in girths {
+        let r = ring(mesh, ring_ids(name));
+        let mid = plane_crossings(&r, &sagittal);
+        lm.points.insert(front, extreme(&mid, |p| p.z).ok_or_else(|| err(front, "ring misses x = 0"))?);
+        lm.points.insert(back, extreme(&mid, |p| -p.z).ok_or_else(|| err(back, "ring misses x = 0"))?);
+        let coronal = Plane { normal: DVec3::Z, offset: r.centroid().z };
+        let side = plane_crossings(&r, &coronal);
+        lm.points.insert(left, extreme(&side, |p| p.x).ok_or_else(|| err(left, "ring misses its coronal plane"))?);
+        lm.points.insert(right, extreme(&side, |p| -p.x).ok_or_else(|| err(right, "ring misses its coronal plane"))?);
+    }
+    let limbs = [
+        ("thigh-circ", PointId::ThighLeft, PointId::ThighRight),
+        ("knee-circ", PointId::KneeLeft, PointId::KneeRight),
+        ("ankle-circ", PointId::AnkleLeft, PointId::AnkleRight),
+    ];
+    for (name, left, right) in limbs {
+        let ids = ring_ids(name);
+        let rl = ring(mesh, ids.iter().copied());
+        let rr = ring(mesh, ids.iter().map(|&v| model.mirror(v)));
+        // make sure "left" is the ring on +X whatever side the data uses
+        let (rl, rr) = if rl.centroid().x >= rr.centroid().x { (rl, rr) } else { (rr, rl) };
+        let cl = plane_crossings(&rl, &Plane { normal: DVec3::Z, offset: rl.centroid().z });
+        let cr = plane_crossings(&rr, &Plane { normal: DVec3::Z, offset: rr.centroid().z });
+        lm.points.insert(left, extreme(&cl, |p| p.x).ok_or_else(|| err(left, "ring misses its coronal plane"))?);
+        lm.points.insert(right, extreme(&cr, |p| -p.x).ok_or_else(|| err(right, "ring misses its coronal plane"))?);
+    }
+    // shoulders: the lateral end of MakeHuman's shoulder-dist measure
+    let sd = ring_ids("shoulder-dist");
+    let acromion = sd
+        .iter()
+        .copied()
+        .max_by(|a, b| mesh.position(*a).x.abs().total_cmp(&mesh.position(*b).x.abs()))
+        .ok_or_else(|| err(PointId::ShoulderLeft, "no shoulder-dist measure"))?;
+    let (sl, sr) = (mesh.position(acromion), mesh.position(model.mirror(acromion)));
+    let (sl, sr) = if sl.x >= sr.x { (sl, sr) } else { (sr, sl) };
+    lm.points.insert(PointId::ShoulderLeft, sl);
+    lm.points.insert(PointId::ShoulderRight, sr);
+    // crotch: lowest vertex on the sagittal plane (mirror of itself)
+    let crotch = (0..mesh.vertex_count() as u32)
+        .map(VertexId)
+        .filter(|&v| model.mirror(v) == v)
+        .map(|v| mesh.position(v))
+        .min_by(|a, b| a.y.total_cmp(&b.y))
+        .ok_or_else(|| err(PointId::Crotch, "no vertex on the sagittal plane"))?;
+    lm.points.insert(PointId::Crotch, crotch);
+    // armpits: on the coronal section through the upper arm
+    let arm_z = ring(mesh, ring_ids("upperarm-circ")).centroid().z;
+    for (bust, id, sign) in [(PointId::BustLeft, PointId::UnderarmLeft, 1.0), (PointId::BustRight, PointId::UnderarmRight, -1.0)]
+    {
+        let start_y = lm.points[&bust].y;
+        lm.points.insert(id, armpit(mesh, arm_z, start_y, sign).ok_or_else(|| err(id, "no armpit above the bust"))?);
+    }
+    Ok(lm)
+}
+
+/// On the coronal section `z = arm_z`, starts at the torso's side at
+/// height `start_y` (the crossing nearest the midline on the side `sign`)
+/// and walks up to the first local maximum of height.
+fn armpit(mesh: &TriMesh, arm_z: f64, start_y: f64, sign: f64) -> Option<DVec3> {
+    let plane = Plane { normal: DVec3::Z, offset: arm_z };
+    let level = Plane { normal: DVec3::Y, offset: start_y };
+    let mut best: Option<(f64, Polyline, DVec3)> = None;
+    for s in slice(mesh, &plane).into_iter().filter(|s| s.polyline.closed) {
+        for p in plane_crossings(&s.polyline, &level) {
+            let x = p.x * sign;
+            if x > 0.0 && best.as_ref().is_none_or(|b| x < b.0) {
+                best = Some((x, s.polyline.clone(), p));
+            }
+        }
+    }
+    let (_, poly, start) = best?;
+    let n = poly.points.len();
+    let i0 = (0..n).min_by(|&a, &b| poly.points[a].distance(start).total_cmp(&poly.points[b].distance(start)))?;
+    let up = if poly.points[(i0 + 1) % n].y >= poly.points[(i0 + n - 1) % n].y { 1 } else { n - 1 };
+    let mut i = i0;
+    for _ in 0..n {
+        let j = (i + up) % n;
+        if poly.points[j].y < poly.points[i].y {
+            return Some(poly.points[i]);
+        }
+        i = j;
+    }
+    None
+}

@@ -1,0 +1,5 @@
+//! The embedded parametric mannequin (MakeHuman hm08) and size-chart fitting.
+
+pub mod data;
+pub mod model;
+pub mod landmarks;
