@@ -9,7 +9,9 @@ fn main() {
     let t = std::time::Instant::now();
     let mesh = model.build(&p).unwrap();
     println!("build {:?} bbox {:?}", t.elapsed(), mesh.aabb());
-    let lm = hm08_landmarks(model, &mesh).unwrap();
+    let mut o = grade3d::mannequin::landmarks::Hm08LandmarkOptions::default();
+    o.neck_base_tilt_deg = std::env::var("TILT").map(|s| s.parse().unwrap()).unwrap_or(25.0);
+    let lm = hm08_landmarks(model, &mesh, &o).unwrap();
     for (k, v) in &lm.points {
         println!("lm {k}: {v:.3}");
     }
@@ -18,6 +20,9 @@ fn main() {
     println!("derive {:?}", t.elapsed());
     match fb {
         Ok(fb) => {
+            for (k, v) in grade3d::body::measure::measure(&fb, &Default::default()) {
+                println!("measure {k}: {:.1} cm", v * 100.0);
+            }
             for (k, c) in &fb.curves {
                 println!("curve {k}: {} pts, len {:.3}", c.polyline.points.len(), c.polyline.length());
             }

@@ -3,4 +3,5 @@
 
 pub mod derive;
 pub mod feature;
+pub mod measure;
 pub mod vocab;

@@ -5,4 +5,5 @@ pub mod mesh;
 pub mod plane;
 pub mod polyline;
 pub mod query;
+pub mod simplify;
 pub mod slice;

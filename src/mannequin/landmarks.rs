@@ -3,6 +3,11 @@
 //! MakeHuman's measurement rings (`measures.json`) are girth lines drawn
 //! on the hm08 topology; they follow the body under every target. From
 //! them, on any hm08 body:
+//! * neck base: the side neck points are the medial end of MakeHuman's
+//!   `shoulder-dist` measure and its mirror; the plane through them that
+//!   contains the lateral axis, tilted forward-down by
+//!   [`Hm08LandmarkOptions::neck_base_tilt_deg`], meets the sagittal plane
+//!   at the front neck point and the cervicale;
 //! * girth points: where a ring crosses the sagittal plane x = 0 (front:
 //!   larger z, back: smaller z) and the coronal plane through its centroid
 //!   (left: larger x — the body's left is +X — right: smaller x);
@@ -28,6 +33,22 @@ use crate::geom::mesh::{TriMesh, VertexId};
 use crate::geom::plane::Plane;
 use crate::geom::polyline::Polyline;
 use crate::geom::slice::slice;
+
+/// Knobs of the hm08 landmark finder.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct Hm08LandmarkOptions {
+    /// Forward-down tilt of the neck base plane about the lateral axis
+    /// through the side neck points, degrees (the front neck point lies
+    /// below the cervicale). Default 25.
+    pub neck_base_tilt_deg: f64,
+}
+
+impl Default for Hm08LandmarkOptions {
+    fn default() -> Self {
+        Self { neck_base_tilt_deg: 25.0 }
+    }
+}
 
 /// A landmark that could not be found on an hm08 body.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -71,7 +92,7 @@ fn extreme(points: &[DVec3], key: impl Fn(DVec3) -> f64) -> Option<DVec3> {
 }
 
 /// The landmarks of an hm08 body (a mesh built by [`BodyModel::build`]).
-pub fn hm08_landmarks(model: &BodyModel, mesh: &TriMesh) -> Result<Landmarks, LandmarkError> {
+pub fn hm08_landmarks(model: &BodyModel, mesh: &TriMesh, opts: &Hm08LandmarkOptions) -> Result<Landmarks, LandmarkError> {
     let data = model.data();
     let ring_ids = |name: &str| -> Vec<VertexId> {
         data.rings.get(name).map(|r| r.iter().map(|&v| VertexId(u32::from(v))).collect()).unwrap_or_default()
@@ -81,7 +102,6 @@ pub fn hm08_landmarks(model: &BodyModel, mesh: &TriMesh) -> Result<Landmarks, La
     let sagittal = Plane { normal: DVec3::X, offset: 0.0 };
 
     let girths = [
-        ("neck-circ", [PointId::NeckFront, PointId::NeckBack, PointId::NeckLeft, PointId::NeckRight]),
         ("bust-circ", [PointId::BustFront, PointId::BustBack, PointId::BustLeft, PointId::BustRight]),
         ("underbust-circ", [PointId::UnderbustFront, PointId::UnderbustBack, PointId::UnderbustLeft, PointId::UnderbustRight]),
         ("waist-circ", [PointId::WaistFront, PointId::WaistBack, PointId::WaistLeft, PointId::WaistRight]),
@@ -97,6 +117,31 @@ pub fn hm08_landmarks(model: &BodyModel, mesh: &TriMesh) -> Result<Landmarks, La
         lm.points.insert(left, extreme(&side, |p| p.x).ok_or_else(|| err(left, "ring misses its coronal plane"))?);
         lm.points.insert(right, extreme(&side, |p| -p.x).ok_or_else(|| err(right, "ring misses its coronal plane"))?);
     }
+    // neck base: the plane through the side neck points (medial end of
+    // MakeHuman's `shoulder-dist`, and its mirror), containing the lateral
+    // axis and tilted forward-down by `neck_base_tilt_deg`; the front and
+    // back neck points are where its section meets the sagittal plane.
+    let side = ring_ids("shoulder-dist")
+        .into_iter()
+        .min_by(|a, b| mesh.position(*a).x.abs().total_cmp(&mesh.position(*b).x.abs()))
+        .ok_or_else(|| err(PointId::NeckLeft, "no shoulder-dist measure"))?;
+    let (nl, nr) = (mesh.position(side), mesh.position(model.mirror(side)));
+    let (nl, nr) = if nl.x >= nr.x { (nl, nr) } else { (nr, nl) };
+    let tilt = opts.neck_base_tilt_deg.to_radians();
+    let centre = 0.5 * (nl + nr);
+    let neck_plane = Plane::from_point_normal(centre, DVec3::new(0.0, tilt.cos(), tilt.sin()))
+        .ok_or_else(|| err(PointId::NeckFront, "bad neck plane"))?;
+    let neck = slice(mesh, &neck_plane)
+        .into_iter()
+        .map(|s| s.polyline)
+        .filter(|p| p.closed && p.contains_projected(&neck_plane, centre))
+        .min_by(|a, b| a.length().total_cmp(&b.length()))
+        .ok_or_else(|| err(PointId::NeckFront, "the neck base plane misses the neck"))?;
+    let mid = plane_crossings(&neck, &sagittal);
+    lm.points.insert(PointId::NeckFront, extreme(&mid, |p| p.z).ok_or_else(|| err(PointId::NeckFront, "no front"))?);
+    lm.points.insert(PointId::NeckBack, extreme(&mid, |p| -p.z).ok_or_else(|| err(PointId::NeckBack, "no back"))?);
+    lm.points.insert(PointId::NeckLeft, nl);
+    lm.points.insert(PointId::NeckRight, nr);
     let limbs = [
         ("thigh-circ", PointId::ThighLeft, PointId::ThighRight),
         ("knee-circ", PointId::KneeLeft, PointId::KneeRight),

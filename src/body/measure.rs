@@ -1,0 +1,221 @@
+//! Body measurements of any feature human model, by one piece of code.
+//!
+//! Names follow ISO 8559-1:2017; values are metres.
+//! * **Girths** are tape-measure lengths: the perimeter of the convex hull
+//!   of the girth's section loop, projected onto its plane (a tape bridges
+//!   concavities such as the hollow between the breasts).
+//! * **Shoulder girth** (ISO 8559-1 5.3.3) passes over the deltoids and
+//!   around the arms: the hull of every loop cut by the horizontal plane a
+//!   fraction [`MeasureOptions::shoulder_girth_level`] of the way from the
+//!   shoulder points down to the armpits.
+//! * **Heights** are above the lowest point of the body (the sole).
+//! * **Lengths along the body** follow its feature curves (back length from
+//!   the cervicale to the back waist point along the centre back line).
+//!
+//! No failure modes beyond a body without the needed curves, which a
+//! [`FeatureBody`] built by [`crate::body::derive`] always has.
+
+use std::collections::BTreeMap;
+use std::fmt;
+use std::str::FromStr;
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use super::feature::FeatureBody;
+use super::vocab::{CurveId, PointId, UnknownId};
+use crate::geom::mesh::TriMesh;
+use crate::geom::plane::Plane;
+use crate::geom::polyline::{tape_length, Polyline};
+use crate::geom::slice::slice;
+
+/// Knobs of the measurements.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct MeasureOptions {
+    /// Where the shoulder girth is taken, as a fraction of the way from
+    /// the shoulder points (0) down to the armpits (1). Default 0.35.
+    pub shoulder_girth_level: f64,
+}
+
+impl Default for MeasureOptions {
+    fn default() -> Self {
+        Self { shoulder_girth_level: 0.25 }
+    }
+}
+
+macro_rules! measurement_ids {
+    ($($(#[$doc:meta])* $var:ident = $s:literal),+ $(,)?) => {
+        /// A body measurement.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+        pub enum MeasurementId { $($(#[$doc])* $var),+ }
+        impl MeasurementId {
+            /// Every measurement.
+            pub const ALL: &'static [MeasurementId] = &[$(MeasurementId::$var),+];
+            /// Stable string ID.
+            pub fn as_str(self) -> &'static str { match self { $(MeasurementId::$var => $s),+ } }
+        }
+        impl FromStr for MeasurementId {
+            type Err = UnknownId;
+            fn from_str(s: &str) -> Result<Self, UnknownId> {
+                match s {
+                    $($s => Ok(MeasurementId::$var),)+
+                    _ => Err(UnknownId { kind: "MeasurementId", id: s.to_owned() }),
+                }
+            }
+        }
+    };
+}
+
+measurement_ids! {
+    /// Stature (ISO 8559-1 5.1.1).
+    Stature = "stature",
+    /// Neck base girth (5.3.2).
+    NeckBaseGirth = "neck_base_girth",
+    /// Shoulder girth over the deltoids and arms (5.3.3).
+    ShoulderGirth = "shoulder_girth",
+    /// Chest girth at armpit level, "upper chest" in ASTM D5585 (5.3.4).
+    ChestGirth = "chest_girth",
+    /// Bust girth (5.3.5).
+    BustGirth = "bust_girth",
+    /// Underbust girth (5.3.6).
+    UnderbustGirth = "underbust_girth",
+    /// Waist girth (5.3.10).
+    WaistGirth = "waist_girth",
+    /// Hip girth (5.3.13).
+    HipGirth = "hip_girth",
+    /// Thigh girth, left (5.3.20).
+    ThighGirth = "thigh_girth",
+    /// Knee girth, left (5.3.22).
+    KneeGirth = "knee_girth",
+    /// Ankle girth, left (5.3.24).
+    AnkleGirth = "ankle_girth",
+    /// Armscye girth, left (5.3.15).
+    ArmscyeGirth = "armscye_girth",
+    /// Waist height (5.1.9).
+    WaistHeight = "waist_height",
+    /// Hip height (5.1.11).
+    HipHeight = "hip_height",
+    /// Crotch height, i.e. inside leg length to the floor (5.1.15).
+    CrotchHeight = "crotch_height",
+    /// Shoulder width: straight distance between the shoulder points (5.4.2).
+    ShoulderWidth = "shoulder_width",
+    /// Shoulder length: side neck point to shoulder point along the shoulder line, left (5.4.1).
+    ShoulderLength = "shoulder_length",
+    /// Back length: cervicale to back waist point along the centre back line (5.4.5).
+    BackLength = "back_length",
+    /// Front length: front neck point to front waist point along the centre front line.
+    FrontLength = "front_length",
+}
+
+impl fmt::Display for MeasurementId {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl Serialize for MeasurementId {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.as_str())
+    }
+}
+
+impl<'de> Deserialize<'de> for MeasurementId {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        String::deserialize(d)?.parse().map_err(serde::de::Error::custom)
+    }
+}
+
+impl MeasurementId {
+    /// Whether this is a girth (a closed tape measure).
+    pub fn is_girth(self) -> bool {
+        self.as_str().ends_with("_girth")
+    }
+
+    /// The feature curve a girth is taken along, if it has one.
+    pub fn girth_curve(self) -> Option<CurveId> {
+        Some(match self {
+            MeasurementId::NeckBaseGirth => CurveId::NeckBase,
+            MeasurementId::ChestGirth => CurveId::Chest,
+            MeasurementId::BustGirth => CurveId::Bust,
+            MeasurementId::UnderbustGirth => CurveId::Underbust,
+            MeasurementId::WaistGirth => CurveId::Waist,
+            MeasurementId::HipGirth => CurveId::Hip,
+            MeasurementId::ThighGirth => CurveId::ThighLeft,
+            MeasurementId::KneeGirth => CurveId::KneeLeft,
+            MeasurementId::AnkleGirth => CurveId::AnkleLeft,
+            MeasurementId::ArmscyeGirth => CurveId::ArmscyeLeft,
+            _ => return None,
+        })
+    }
+}
+
+/// Measurements by ID, metres.
+pub type Measurements = BTreeMap<MeasurementId, f64>;
+
+/// Tape length of a closed curve: hull perimeter in its plane (the given
+/// plane, or the best-fit plane of its points, or its plain length).
+pub fn girth_of(poly: &Polyline, plane: Option<&Plane>) -> f64 {
+    match plane.copied().or_else(|| Plane::fit(&poly.points)) {
+        Some(p) => tape_length(&[poly], &p),
+        None => poly.length(),
+    }
+}
+
+/// Shoulder girth of `mesh` at the level between the shoulder points and
+/// the armpits (see the module doc).
+pub fn shoulder_girth(mesh: &TriMesh, shoulders: [DVec3; 2], armpits: [DVec3; 2], opts: &MeasureOptions) -> f64 {
+    let ys = 0.5 * (shoulders[0].y + shoulders[1].y);
+    let ya = 0.5 * (armpits[0].y + armpits[1].y);
+    let plane = Plane { normal: DVec3::Y, offset: ys + opts.shoulder_girth_level * (ya - ys) };
+    let loops = slice(mesh, &plane);
+    let polys: Vec<&Polyline> = loops.iter().map(|s| &s.polyline).collect();
+    tape_length(&polys, &plane)
+}
+
+fn arc_between(poly: &Polyline, a: DVec3, b: DVec3) -> f64 {
+    match (poly.closest(a), poly.closest(b)) {
+        (Some(x), Some(y)) => (y.s - x.s).abs(),
+        _ => 0.0,
+    }
+}
+
+/// Every measurement of a feature human model.
+pub fn measure(body: &FeatureBody, opts: &MeasureOptions) -> Measurements {
+    let mut m = Measurements::new();
+    let bb = body.mesh.aabb();
+    let floor = bb.min.y;
+    m.insert(MeasurementId::Stature, bb.size().y);
+    for &id in MeasurementId::ALL {
+        if let Some(c) = id.girth_curve().and_then(|c| body.curves.get(&c)) {
+            m.insert(id, girth_of(&c.polyline, c.plane.as_ref()));
+        }
+    }
+    let p = |id: PointId| body.points.get(&id).map(|p| p.position);
+    if let (Some(sl), Some(sr), Some(al), Some(ar)) =
+        (p(PointId::ShoulderLeft), p(PointId::ShoulderRight), p(PointId::UnderarmLeft), p(PointId::UnderarmRight))
+    {
+        m.insert(MeasurementId::ShoulderGirth, shoulder_girth(&body.mesh, [sl, sr], [al, ar], opts));
+        m.insert(MeasurementId::ShoulderWidth, sl.distance(sr));
+    }
+    if let (Some(wf), Some(wb)) = (p(PointId::WaistFront), p(PointId::WaistBack)) {
+        m.insert(MeasurementId::WaistHeight, 0.5 * (wf.y + wb.y) - floor);
+    }
+    if let Some(h) = p(PointId::HipLeft) {
+        m.insert(MeasurementId::HipHeight, h.y - floor);
+    }
+    if let Some(c) = p(PointId::Crotch) {
+        m.insert(MeasurementId::CrotchHeight, c.y - floor);
+    }
+    let curve = |id: CurveId| body.curves.get(&id).map(|c| &c.polyline);
+    if let (Some(line), Some(a), Some(b)) = (curve(CurveId::ShoulderLineLeft), p(PointId::NeckLeft), p(PointId::ShoulderLeft)) {
+        m.insert(MeasurementId::ShoulderLength, arc_between(line, a, b));
+    }
+    if let (Some(line), Some(a), Some(b)) = (curve(CurveId::CentreBack), p(PointId::NeckBack), p(PointId::WaistBack)) {
+        m.insert(MeasurementId::BackLength, arc_between(line, a, b));
+    }
+    if let (Some(line), Some(a), Some(b)) = (curve(CurveId::CentreFront), p(PointId::NeckFront), p(PointId::WaistFront)) {
+        m.insert(MeasurementId::FrontLength, arc_between(line, a, b));
+    }
+    m
+}
