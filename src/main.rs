@@ -43,9 +43,7 @@ enum DataCommand {
 
 fn main() -> ExitCode {
     tracing_subscriber::fmt()
-        .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into()),
-        )
+        .with_env_filter(tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into()))
         .init();
     let cli = Cli::parse();
     match run(cli) {
@@ -72,7 +70,9 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
                 Ok::<(), Box<dyn std::error::Error>>(())
             })?;
         }
-        Command::Data { what: DataCommand::Mannequin { makehuman, out } } => {
+        Command::Data {
+            what: DataCommand::Mannequin { makehuman, out },
+        } => {
             let data = grade3d::mannequin::data::from_makehuman(&makehuman)?;
             let bytes = grade3d::mannequin::data::encode(&data);
             std::fs::write(&out, &bytes)?;

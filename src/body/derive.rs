@@ -179,7 +179,11 @@ pub fn derive_features(
 ) -> Result<FeatureBody, FeatureError> {
     let stature = mesh.aabb().size().y;
     if !(stature >= opts.min_stature_m && stature <= opts.max_stature_m) {
-        return Err(FeatureError::BodySize { stature_m: stature, min_m: opts.min_stature_m, max_m: opts.max_stature_m });
+        return Err(FeatureError::BodySize {
+            stature_m: stature,
+            min_m: opts.min_stature_m,
+            max_m: opts.max_stature_m,
+        });
     }
     // landmarks needed: those of the curves not given explicitly
     let mut missing: Vec<PointId> = vocab::CURVES
@@ -216,7 +220,7 @@ pub fn derive_features(
     for def in vocab::CURVES {
         let curve = match landmarks.curves.get(&def.id) {
             Some(given) => given_curve(def.id, given)?,
-            None => derive_curve(&mesh, def.id, &def.rule, &snapped, opts)?,
+            None => curve_by_rule(&mesh, def.id, &def.rule, &snapped, opts)?,
         };
         curves.insert(def.id, curve);
     }
@@ -226,7 +230,10 @@ pub fn derive_features(
     for def in vocab::POINTS {
         let c1 = &curves[&def.f1].polyline;
         let c2 = &curves[&def.f2].polyline;
-        let near = snapped.get(&def.id).copied().unwrap_or_else(|| 0.5 * (c1.centroid() + c2.centroid()));
+        let near = snapped
+            .get(&def.id)
+            .copied()
+            .unwrap_or_else(|| 0.5 * (c1.centroid() + c2.centroid()));
         let gap_tol = 1e-9 * stature;
         let cross = c1.crossing(c2, near, gap_tol).ok_or(FeatureError::CurvesDoNotCross {
             point: def.id,
@@ -243,31 +250,54 @@ pub fn derive_features(
             });
         }
         let position = closest_point(&mesh, cross.point).point;
-        let degenerate = |triple: f64| FeatureError::DegenerateFrame { point: def.id, triple, min: opts.min_frame_triple };
+        let degenerate = |triple: f64| FeatureError::DegenerateFrame {
+            point: def.id,
+            triple,
+            min: opts.min_frame_triple,
+        };
         let t1 = c1.tangent_at(cross.s_a, h).ok_or_else(|| degenerate(0.0))?;
         let t2 = c2.tangent_at(cross.s_b, h).ok_or_else(|| degenerate(0.0))?;
         let n = disc_normal(&mesh, position, opts.normal_radius_mm / MM_PER_M).ok_or_else(|| degenerate(0.0))?;
         let frame = Frame { t1, t2, n };
         let triple = frame.triple();
-        if !(triple.abs() >= opts.min_frame_triple) {
+        if triple.is_nan() || triple.abs() < opts.min_frame_triple {
             return Err(degenerate(triple));
         }
-        points.insert(def.id, FeaturePoint { position, frame, crossing_gap: cross.gap });
+        points.insert(
+            def.id,
+            FeaturePoint {
+                position,
+                frame,
+                crossing_gap: cross.gap,
+            },
+        );
     }
     Ok(FeatureBody { mesh, curves, points })
 }
 
 fn given_curve(id: CurveId, given: &Polyline) -> Result<FeatureCurve, FeatureError> {
     if given.points.len() < 2 {
-        return Err(FeatureError::BadCurve { curve: id, reason: "fewer than 2 points".into() });
+        return Err(FeatureError::BadCurve {
+            curve: id,
+            reason: "fewer than 2 points".into(),
+        });
     }
     if given.points.iter().any(|p| !p.is_finite()) {
-        return Err(FeatureError::BadCurve { curve: id, reason: "non-finite coordinate".into() });
+        return Err(FeatureError::BadCurve {
+            curve: id,
+            reason: "non-finite coordinate".into(),
+        });
     }
     if given.length() <= 0.0 {
-        return Err(FeatureError::BadCurve { curve: id, reason: "zero length".into() });
+        return Err(FeatureError::BadCurve {
+            curve: id,
+            reason: "zero length".into(),
+        });
     }
-    Ok(FeatureCurve { polyline: given.clone(), plane: None })
+    Ok(FeatureCurve {
+        polyline: given.clone(),
+        plane: None,
+    })
 }
 
 fn mean(points: &[DVec3]) -> DVec3 {
@@ -276,27 +306,59 @@ fn mean(points: &[DVec3]) -> DVec3 {
 
 fn section_plane(curve: CurveId, rule: PlaneRule, pts: &[DVec3], opts: &DeriveOptions) -> Result<Plane, FeatureError> {
     let c = mean(pts);
-    let horizontal = |y: f64| Plane { normal: DVec3::Y, offset: y };
+    let horizontal = |y: f64| Plane {
+        normal: DVec3::Y,
+        offset: y,
+    };
     let plane = match rule {
-        PlaneRule::BestFit => Plane::fit(pts).map(|p| p.oriented_towards(DVec3::Y)).unwrap_or(horizontal(c.y)),
+        PlaneRule::BestFit => Plane::fit(pts)
+            .map(|p| p.oriented_towards(DVec3::Y))
+            .unwrap_or(horizontal(c.y)),
         PlaneRule::Horizontal => horizontal(c.y),
         PlaneRule::HorizontalBelowArmpit => horizontal(c.y - opts.chest_below_armpit_mm / MM_PER_M),
         PlaneRule::Containing(axis) => {
             let (a, b) = match pts {
                 [a, b, ..] => (*a, *b),
-                _ => return Err(FeatureError::NoSection { curve, reason: "(rule needs two landmarks)".into() }),
+                _ => {
+                    return Err(FeatureError::NoSection {
+                        curve,
+                        reason: "(rule needs two landmarks)".into(),
+                    })
+                }
             };
             Plane::from_point_normal(a, (b - a).cross(axis.vector())).ok_or_else(|| FeatureError::NoSection {
                 curve,
                 reason: "(its landmarks lie along the rule's axis)".into(),
             })?
         }
-        PlaneRule::Normal(axis) => Plane { normal: axis.vector(), offset: axis.vector().dot(pts[0]) },
+        PlaneRule::Normal(axis) => Plane {
+            normal: axis.vector(),
+            offset: axis.vector().dot(pts[0]),
+        },
     };
     Ok(plane)
 }
 
-fn derive_curve(
+/// One curve by its vocabulary rule, from landmarks already on the surface
+/// (no snapping, no checks beyond the rule's own).
+pub fn derive_curve(
+    mesh: &TriMesh,
+    id: CurveId,
+    landmarks: &BTreeMap<PointId, DVec3>,
+    opts: &DeriveOptions,
+) -> Result<FeatureCurve, FeatureError> {
+    let rule = &vocab::curve_def(id).rule;
+    let needed = match rule {
+        CurveRule::Section { landmarks, .. } | CurveRule::Path { landmarks, .. } => *landmarks,
+    };
+    let missing: Vec<PointId> = needed.iter().copied().filter(|p| !landmarks.contains_key(p)).collect();
+    if !missing.is_empty() {
+        return Err(FeatureError::MissingLandmarks { missing });
+    }
+    curve_by_rule(mesh, id, rule, landmarks, opts)
+}
+
+fn curve_by_rule(
     mesh: &TriMesh,
     id: CurveId,
     rule: &CurveRule,
@@ -304,11 +366,19 @@ fn derive_curve(
     opts: &DeriveOptions,
 ) -> Result<FeatureCurve, FeatureError> {
     match *rule {
-        CurveRule::Section { landmarks, plane, choice, orientation } => {
+        CurveRule::Section {
+            landmarks,
+            plane,
+            choice,
+            orientation,
+        } => {
             let pts: Vec<DVec3> = landmarks.iter().map(|p| snapped[p]).collect();
             let plane = section_plane(id, plane, &pts, opts)?;
-            let loops: Vec<Polyline> =
-                slice(mesh, &plane).into_iter().map(|s| s.polyline).filter(|p| p.points.len() >= 3).collect();
+            let loops: Vec<Polyline> = slice(mesh, &plane)
+                .into_iter()
+                .map(|s| s.polyline)
+                .filter(|p| p.points.len() >= 3)
+                .collect();
             let centre = plane.project(mean(&pts));
             let chosen = match choice {
                 LoopChoice::Encloses => loops
@@ -332,7 +402,10 @@ fn derive_curve(
             if poly.signed_area(orientation.vector()) < 0.0 {
                 poly = poly.reversed();
             }
-            Ok(FeatureCurve { polyline: poly, plane: Some(plane) })
+            Ok(FeatureCurve {
+                polyline: poly,
+                plane: Some(plane),
+            })
         }
         CurveRule::Path { landmarks, depth } => {
             let mut out: Vec<DVec3> = Vec::new();
@@ -348,7 +421,10 @@ fn derive_curve(
                 let skip = usize::from(!out.is_empty());
                 out.extend(piece.points.into_iter().skip(skip));
             }
-            Ok(FeatureCurve { polyline: Polyline::new(out, false), plane: None })
+            Ok(FeatureCurve {
+                polyline: Polyline::new(out, false),
+                plane: None,
+            })
         }
     }
 }

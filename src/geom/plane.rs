@@ -29,7 +29,10 @@ impl Plane {
     /// Returns `None` for a zero or non-finite normal.
     pub fn from_point_normal(point: DVec3, normal: DVec3) -> Option<Self> {
         let n = normal.try_normalize()?;
-        Some(Self { normal: n, offset: n.dot(point) })
+        Some(Self {
+            normal: n,
+            offset: n.dot(point),
+        })
     }
 
     /// Signed distance `n·x − d`.
@@ -46,7 +49,10 @@ impl Plane {
 
     /// The same plane with the normal pointing the other way.
     pub fn flipped(&self) -> Self {
-        Self { normal: -self.normal, offset: -self.offset }
+        Self {
+            normal: -self.normal,
+            offset: -self.offset,
+        }
     }
 
     /// The same plane oriented so that `normal · towards ≥ 0`.
@@ -91,6 +97,7 @@ impl Plane {
 
 /// Eigen-decomposition of a symmetric 3×3 matrix by cyclic Jacobi rotations.
 /// Returns eigenvalues ascending and the matching unit eigenvectors.
+#[expect(clippy::needless_range_loop, reason = "Jacobi rotations index rows and columns as in the textbook formulas")]
 pub fn symmetric_eigen(m: DMat3) -> ([f64; 3], [DVec3; 3]) {
     let mut a = m.to_cols_array_2d(); // a[col][row]; symmetric so fine
     let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
@@ -145,7 +152,9 @@ mod tests {
         let plane = Plane::from_point_normal(DVec3::new(0.1, 1.0, 0.2), n).unwrap();
         let (u, v) = plane.basis();
         let o = plane.project(DVec3::ZERO);
-        let pts: Vec<DVec3> = (0..20).map(|i| o + u * (i as f64).sin() + v * (i as f64 * 0.7).cos()).collect();
+        let pts: Vec<DVec3> = (0..20)
+            .map(|i| o + u * (i as f64).sin() + v * (i as f64 * 0.7).cos())
+            .collect();
         let fit = Plane::fit(&pts).unwrap().oriented_towards(n);
         assert!((fit.normal - n).length() < 1e-12);
         assert!((fit.offset - plane.offset).abs() < 1e-12);

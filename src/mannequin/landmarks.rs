@@ -46,7 +46,9 @@ pub struct Hm08LandmarkOptions {
 
 impl Default for Hm08LandmarkOptions {
     fn default() -> Self {
-        Self { neck_base_tilt_deg: 25.0 }
+        Self {
+            neck_base_tilt_deg: 25.0,
+        }
     }
 }
 
@@ -92,30 +94,85 @@ fn extreme(points: &[DVec3], key: impl Fn(DVec3) -> f64) -> Option<DVec3> {
 }
 
 /// The landmarks of an hm08 body (a mesh built by [`BodyModel::build`]).
-pub fn hm08_landmarks(model: &BodyModel, mesh: &TriMesh, opts: &Hm08LandmarkOptions) -> Result<Landmarks, LandmarkError> {
+pub fn hm08_landmarks(
+    model: &BodyModel,
+    mesh: &TriMesh,
+    opts: &Hm08LandmarkOptions,
+) -> Result<Landmarks, LandmarkError> {
     let data = model.data();
     let ring_ids = |name: &str| -> Vec<VertexId> {
-        data.rings.get(name).map(|r| r.iter().map(|&v| VertexId(u32::from(v))).collect()).unwrap_or_default()
+        data.rings
+            .get(name)
+            .map(|r| r.iter().map(|&v| VertexId(u32::from(v))).collect())
+            .unwrap_or_default()
     };
-    let err = |point: PointId, reason: &str| LandmarkError { point, reason: reason.to_owned() };
+    let err = |point: PointId, reason: &str| LandmarkError {
+        point,
+        reason: reason.to_owned(),
+    };
     let mut lm = Landmarks::default();
-    let sagittal = Plane { normal: DVec3::X, offset: 0.0 };
+    let sagittal = Plane {
+        normal: DVec3::X,
+        offset: 0.0,
+    };
 
     let girths = [
-        ("bust-circ", [PointId::BustFront, PointId::BustBack, PointId::BustLeft, PointId::BustRight]),
-        ("underbust-circ", [PointId::UnderbustFront, PointId::UnderbustBack, PointId::UnderbustLeft, PointId::UnderbustRight]),
-        ("waist-circ", [PointId::WaistFront, PointId::WaistBack, PointId::WaistLeft, PointId::WaistRight]),
-        ("hips-circ", [PointId::HipFront, PointId::HipBack, PointId::HipLeft, PointId::HipRight]),
+        (
+            "bust-circ",
+            [
+                PointId::BustFront,
+                PointId::BustBack,
+                PointId::BustLeft,
+                PointId::BustRight,
+            ],
+        ),
+        (
+            "underbust-circ",
+            [
+                PointId::UnderbustFront,
+                PointId::UnderbustBack,
+                PointId::UnderbustLeft,
+                PointId::UnderbustRight,
+            ],
+        ),
+        (
+            "waist-circ",
+            [
+                PointId::WaistFront,
+                PointId::WaistBack,
+                PointId::WaistLeft,
+                PointId::WaistRight,
+            ],
+        ),
+        (
+            "hips-circ",
+            [PointId::HipFront, PointId::HipBack, PointId::HipLeft, PointId::HipRight],
+        ),
     ];
     for (name, [front, back, left, right]) in girths {
         let r = ring(mesh, ring_ids(name));
         let mid = plane_crossings(&r, &sagittal);
-        lm.points.insert(front, extreme(&mid, |p| p.z).ok_or_else(|| err(front, "ring misses x = 0"))?);
-        lm.points.insert(back, extreme(&mid, |p| -p.z).ok_or_else(|| err(back, "ring misses x = 0"))?);
-        let coronal = Plane { normal: DVec3::Z, offset: r.centroid().z };
+        lm.points.insert(
+            front,
+            extreme(&mid, |p| p.z).ok_or_else(|| err(front, "ring misses x = 0"))?,
+        );
+        lm.points.insert(
+            back,
+            extreme(&mid, |p| -p.z).ok_or_else(|| err(back, "ring misses x = 0"))?,
+        );
+        let coronal = Plane {
+            normal: DVec3::Z,
+            offset: r.centroid().z,
+        };
         let side = plane_crossings(&r, &coronal);
-        lm.points.insert(left, extreme(&side, |p| p.x).ok_or_else(|| err(left, "ring misses its coronal plane"))?);
-        lm.points.insert(right, extreme(&side, |p| -p.x).ok_or_else(|| err(right, "ring misses its coronal plane"))?);
+        lm.points.insert(
+            left,
+            extreme(&side, |p| p.x).ok_or_else(|| err(left, "ring misses its coronal plane"))?,
+        );
+        lm.points.insert(
+            right,
+            extreme(&side, |p| -p.x).ok_or_else(|| err(right, "ring misses its coronal plane"))?,
+        );
     }
     // neck base: the plane through the side neck points (medial end of
     // MakeHuman's `shoulder-dist`, and its mirror), containing the lateral
@@ -138,8 +195,14 @@ pub fn hm08_landmarks(model: &BodyModel, mesh: &TriMesh, opts: &Hm08LandmarkOpti
         .min_by(|a, b| a.length().total_cmp(&b.length()))
         .ok_or_else(|| err(PointId::NeckFront, "the neck base plane misses the neck"))?;
     let mid = plane_crossings(&neck, &sagittal);
-    lm.points.insert(PointId::NeckFront, extreme(&mid, |p| p.z).ok_or_else(|| err(PointId::NeckFront, "no front"))?);
-    lm.points.insert(PointId::NeckBack, extreme(&mid, |p| -p.z).ok_or_else(|| err(PointId::NeckBack, "no back"))?);
+    lm.points.insert(
+        PointId::NeckFront,
+        extreme(&mid, |p| p.z).ok_or_else(|| err(PointId::NeckFront, "no front"))?,
+    );
+    lm.points.insert(
+        PointId::NeckBack,
+        extreme(&mid, |p| -p.z).ok_or_else(|| err(PointId::NeckBack, "no back"))?,
+    );
     lm.points.insert(PointId::NeckLeft, nl);
     lm.points.insert(PointId::NeckRight, nr);
     let limbs = [
@@ -152,11 +215,33 @@ pub fn hm08_landmarks(model: &BodyModel, mesh: &TriMesh, opts: &Hm08LandmarkOpti
         let rl = ring(mesh, ids.iter().copied());
         let rr = ring(mesh, ids.iter().map(|&v| model.mirror(v)));
         // make sure "left" is the ring on +X whatever side the data uses
-        let (rl, rr) = if rl.centroid().x >= rr.centroid().x { (rl, rr) } else { (rr, rl) };
-        let cl = plane_crossings(&rl, &Plane { normal: DVec3::Z, offset: rl.centroid().z });
-        let cr = plane_crossings(&rr, &Plane { normal: DVec3::Z, offset: rr.centroid().z });
-        lm.points.insert(left, extreme(&cl, |p| p.x).ok_or_else(|| err(left, "ring misses its coronal plane"))?);
-        lm.points.insert(right, extreme(&cr, |p| -p.x).ok_or_else(|| err(right, "ring misses its coronal plane"))?);
+        let (rl, rr) = if rl.centroid().x >= rr.centroid().x {
+            (rl, rr)
+        } else {
+            (rr, rl)
+        };
+        let cl = plane_crossings(
+            &rl,
+            &Plane {
+                normal: DVec3::Z,
+                offset: rl.centroid().z,
+            },
+        );
+        let cr = plane_crossings(
+            &rr,
+            &Plane {
+                normal: DVec3::Z,
+                offset: rr.centroid().z,
+            },
+        );
+        lm.points.insert(
+            left,
+            extreme(&cl, |p| p.x).ok_or_else(|| err(left, "ring misses its coronal plane"))?,
+        );
+        lm.points.insert(
+            right,
+            extreme(&cr, |p| -p.x).ok_or_else(|| err(right, "ring misses its coronal plane"))?,
+        );
     }
     // shoulders: the lateral end of MakeHuman's shoulder-dist measure
     let sd = ring_ids("shoulder-dist");
@@ -179,10 +264,15 @@ pub fn hm08_landmarks(model: &BodyModel, mesh: &TriMesh, opts: &Hm08LandmarkOpti
     lm.points.insert(PointId::Crotch, crotch);
     // armpits: on the coronal section through the upper arm
     let arm_z = ring(mesh, ring_ids("upperarm-circ")).centroid().z;
-    for (bust, id, sign) in [(PointId::BustLeft, PointId::UnderarmLeft, 1.0), (PointId::BustRight, PointId::UnderarmRight, -1.0)]
-    {
+    for (bust, id, sign) in [
+        (PointId::BustLeft, PointId::UnderarmLeft, 1.0),
+        (PointId::BustRight, PointId::UnderarmRight, -1.0),
+    ] {
         let start_y = lm.points[&bust].y;
-        lm.points.insert(id, armpit(mesh, arm_z, start_y, sign).ok_or_else(|| err(id, "no armpit above the bust"))?);
+        lm.points.insert(
+            id,
+            armpit(mesh, arm_z, start_y, sign).ok_or_else(|| err(id, "no armpit above the bust"))?,
+        );
     }
     Ok(lm)
 }
@@ -191,8 +281,14 @@ pub fn hm08_landmarks(model: &BodyModel, mesh: &TriMesh, opts: &Hm08LandmarkOpti
 /// height `start_y` (the crossing nearest the midline on the side `sign`)
 /// and walks up to the first local maximum of height.
 fn armpit(mesh: &TriMesh, arm_z: f64, start_y: f64, sign: f64) -> Option<DVec3> {
-    let plane = Plane { normal: DVec3::Z, offset: arm_z };
-    let level = Plane { normal: DVec3::Y, offset: start_y };
+    let plane = Plane {
+        normal: DVec3::Z,
+        offset: arm_z,
+    };
+    let level = Plane {
+        normal: DVec3::Y,
+        offset: start_y,
+    };
     let mut best: Option<(f64, Polyline, DVec3)> = None;
     for s in slice(mesh, &plane).into_iter().filter(|s| s.polyline.closed) {
         for p in plane_crossings(&s.polyline, &level) {
@@ -204,8 +300,16 @@ fn armpit(mesh: &TriMesh, arm_z: f64, start_y: f64, sign: f64) -> Option<DVec3> 
     }
     let (_, poly, start) = best?;
     let n = poly.points.len();
-    let i0 = (0..n).min_by(|&a, &b| poly.points[a].distance(start).total_cmp(&poly.points[b].distance(start)))?;
-    let up = if poly.points[(i0 + 1) % n].y >= poly.points[(i0 + n - 1) % n].y { 1 } else { n - 1 };
+    let i0 = (0..n).min_by(|&a, &b| {
+        poly.points[a]
+            .distance(start)
+            .total_cmp(&poly.points[b].distance(start))
+    })?;
+    let up = if poly.points[(i0 + 1) % n].y >= poly.points[(i0 + n - 1) % n].y {
+        1
+    } else {
+        n - 1
+    };
     let mut i = i0;
     for _ in 0..n {
         let j = (i + up) % n;

@@ -1,6 +1,7 @@
 //! The embedded parametric mannequin (MakeHuman hm08) and size-chart fitting.
 
 pub mod data;
+pub mod fit;
+pub mod landmarks;
 pub mod model;
 pub mod size_chart;
-pub mod landmarks;

@@ -10,5 +10,7 @@ pub struct AppState {}
 
 /// The service's router.
 pub fn app(state: AppState) -> Router {
-    Router::new().route("/healthz", get(|| async { "ok" })).with_state(state)
+    Router::new()
+        .route("/healthz", get(|| async { "ok" }))
+        .with_state(state)
 }

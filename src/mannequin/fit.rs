@@ -1,0 +1,648 @@
+//! Fitting the mannequin to a size-chart row.
+//!
+//! **Phase 1 — parameters.** The body model's macro `weight` (and
+//! `height` when stature is given) and the local modifiers that act on the
+//! row's measurements (`torso/measure-bust-circ` for the bust girth, …; see
+//! [`modifier_for`]) are solved by damped Gauss–Newton
+//! (Levenberg–Marquardt) with forward-difference Jacobians:
+//!
+//! `min_x Σ_k (m_k(x) − t_k)² + μ² |x − x₀|²`,  `x` clamped to its range,
+//!
+//! `μ` = [`FitOptions::prior_weight_mm`] per unit of parameter, which keeps
+//! parameters the row does not constrain at their defaults.
+//!
+//! **Phase 2 — feature profiles** (seed 003 §3, Eq. 1). The gap left by
+//! phase 1 is closed by scaling each measured torso profile (neck base,
+//! shoulder, chest, bust, underbust, waist, hip) in width (X) and depth
+//! (Z) about its centre O_k by `s_k`, and blending the scaling of the
+//! vertices between two profiles by the weighted arithmetic mean
+//! `s = w_a s_a + w_b s_b`, `w_a = (y_b − y)/(y_b − y_a)`, `w_b = 1 − w_a`
+//! (seed 003 Eq. 1, with the step `i/n` read as the height fraction).
+//! Above the top and below the bottom profile the scaling fades to 1 over
+//! [`FitOptions::blend_falloff_mm`]. Arms (found by flood fill beyond the
+//! armscye section) move rigidly with their shoulder point. Each `s_k` is
+//! updated by `s_k ← s_k · t_k / m_k` until every girth is within
+//! [`FitOptions::girth_tolerance_mm`].
+//!
+//! The residual of every measurement is reported.
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use super::landmarks::{hm08_landmarks, Hm08LandmarkOptions, LandmarkError};
+use super::model::{BodyModel, MannequinError, MannequinParams};
+use super::size_chart::SizeRow;
+use crate::body::derive::{derive_curve, derive_features, DeriveOptions, FeatureError, Landmarks, MM_PER_M};
+use crate::body::feature::FeatureBody;
+use crate::body::measure::{girth_of, measure, shoulder_girth, MeasureOptions, MeasurementId, Measurements};
+use crate::body::vocab::{CurveId, PointId};
+use crate::geom::mesh::{TriMesh, VertexId};
+use crate::geom::plane::Plane;
+use crate::geom::slice::slice;
+
+/// Knobs of the fit.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct FitOptions {
+    /// Starting parameters (gender, age, race, …). Default: the neutral
+    /// body with gender 0 (female).
+    pub base: MannequinParams,
+    /// Most Levenberg–Marquardt iterations in phase 1. Default 12.
+    pub max_iterations: usize,
+    /// Phase 1 stops when every residual is below this, mm. Default 3.
+    pub phase1_tolerance_mm: f64,
+    /// Forward-difference step of a parameter. Default 0.05.
+    pub fd_step: f64,
+    /// Residual (mm) that one unit of parameter change costs in the
+    /// regulariser. Default 5.
+    pub prior_weight_mm: f64,
+    /// Most profile-scaling rounds in phase 2. Default 10.
+    pub scaling_iterations: usize,
+    /// Phase 2 stops when every girth residual is below this, mm. Default 0.5.
+    pub girth_tolerance_mm: f64,
+    /// Distance over which profile scaling fades out above the top and
+    /// below the bottom profile, mm. Default 80.
+    pub blend_falloff_mm: f64,
+    /// Lateral offset of the plane that separates an arm from the torso,
+    /// beyond the armscye, mm. Default 10.
+    pub arm_cut_offset_mm: f64,
+    /// Feature derivation options.
+    pub derive: DeriveOptions,
+    /// Measurement options.
+    pub measure: MeasureOptions,
+    /// hm08 landmark options.
+    pub landmarks: Hm08LandmarkOptions,
+}
+
+impl Default for FitOptions {
+    fn default() -> Self {
+        let mut base = MannequinParams::default();
+        base.macros.gender = 0.0;
+        Self {
+            base,
+            max_iterations: 12,
+            phase1_tolerance_mm: 3.0,
+            fd_step: 0.05,
+            prior_weight_mm: 5.0,
+            scaling_iterations: 10,
+            girth_tolerance_mm: 0.5,
+            blend_falloff_mm: 80.0,
+            arm_cut_offset_mm: 10.0,
+            derive: DeriveOptions::default(),
+            measure: MeasureOptions::default(),
+            landmarks: Hm08LandmarkOptions::default(),
+        }
+    }
+}
+
+/// Why a fit failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum FitError {
+    /// Invalid parameters or model data.
+    #[error(transparent)]
+    Mannequin(#[from] MannequinError),
+    /// A landmark could not be found on an intermediate body.
+    #[error(transparent)]
+    Landmark(#[from] LandmarkError),
+    /// Feature derivation failed on an intermediate body.
+    #[error(transparent)]
+    Feature(#[from] FeatureError),
+    /// The row asks for a measurement this fit cannot target.
+    #[error("size `{size}`: `{measurement}` cannot be fitted")]
+    Unsupported {
+        /// The size.
+        size: String,
+        /// The measurement.
+        measurement: MeasurementId,
+    },
+}
+
+/// Target, achieved value and residual of one measurement.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Residual {
+    /// Target, m.
+    pub target_m: f64,
+    /// Achieved, m.
+    pub achieved_m: f64,
+}
+
+impl Residual {
+    /// achieved − target, mm.
+    pub fn error_mm(&self) -> f64 {
+        (self.achieved_m - self.target_m) * MM_PER_M
+    }
+}
+
+/// A mannequin fitted to one size.
+#[derive(Debug, Clone)]
+pub struct FittedMannequin {
+    /// Size label.
+    pub size: String,
+    /// Phase-1 parameters.
+    pub params: MannequinParams,
+    /// Phase-2 profile scales, by measurement.
+    pub profile_scales: BTreeMap<MeasurementId, f64>,
+    /// The feature human model.
+    pub body: FeatureBody,
+    /// Every measurement of the result.
+    pub measurements: Measurements,
+    /// Residual of every target.
+    pub residuals: BTreeMap<MeasurementId, Residual>,
+    /// Phase-1 iterations used.
+    pub iterations: usize,
+    /// Phase-2 rounds used.
+    pub scaling_rounds: usize,
+}
+
+/// The local modifier that moves a measurement, if any.
+pub fn modifier_for(id: MeasurementId) -> Option<&'static str> {
+    use MeasurementId as M;
+    Some(match id {
+        M::NeckBaseGirth => "neck/measure-neck-circ",
+        M::BustGirth => "torso/measure-bust-circ",
+        M::UnderbustGirth => "torso/measure-underbust-circ",
+        M::WaistGirth => "torso/measure-waist-circ",
+        M::HipGirth => "torso/measure-hips-circ",
+        M::ShoulderGirth | M::ShoulderWidth => "torso/measure-shoulder-dist",
+        M::ChestGirth => "torso/measure-frontchest-dist",
+        M::ThighGirth => "legs/measure-thigh-circ",
+        M::KneeGirth => "legs/measure-knee-circ",
+        M::BackLength => "torso/measure-napetowaist-dist",
+        _ => return None,
+    })
+}
+
+/// Torso profiles phase 2 can scale.
+fn profile_curve(id: MeasurementId) -> Option<Option<CurveId>> {
+    use MeasurementId as M;
+    Some(match id {
+        M::NeckBaseGirth => Some(CurveId::NeckBase),
+        M::ChestGirth => Some(CurveId::Chest),
+        M::BustGirth => Some(CurveId::Bust),
+        M::UnderbustGirth => Some(CurveId::Underbust),
+        M::WaistGirth => Some(CurveId::Waist),
+        M::HipGirth => Some(CurveId::Hip),
+        M::ShoulderGirth => None,
+        _ => return None,
+    })
+}
+
+#[derive(Debug, Clone, Copy)]
+enum Var {
+    Weight,
+    Height,
+    Modifier(&'static str),
+}
+
+fn apply(base: &MannequinParams, vars: &[Var], x: &[f64]) -> MannequinParams {
+    let mut p = base.clone();
+    for (v, &xi) in vars.iter().zip(x) {
+        match v {
+            Var::Weight => p.macros.weight = xi,
+            Var::Height => p.macros.height = xi,
+            Var::Modifier(name) => {
+                p.modifiers.insert((*name).to_owned(), xi);
+            }
+        }
+    }
+    p
+}
+
+fn bounds(v: Var) -> (f64, f64) {
+    match v {
+        Var::Weight | Var::Height => (0.0, 1.0),
+        Var::Modifier(_) => (-1.0, 1.0),
+    }
+}
+
+/// Fast measurement of the targets on an hm08 mesh (phase 1): only the
+/// sections the targets need, from the hm08 landmarks.
+fn quick_measure(
+    model: &BodyModel,
+    mesh: &TriMesh,
+    ids: &[MeasurementId],
+    opts: &FitOptions,
+) -> Result<Vec<f64>, FitError> {
+    let lm = hm08_landmarks(model, mesh, &opts.landmarks)?;
+    let mut out = Vec::with_capacity(ids.len());
+    for &id in ids {
+        let v = if id == MeasurementId::Stature {
+            mesh.aabb().size().y
+        } else if id == MeasurementId::ShoulderGirth {
+            let level = |p: PointId| lm.points[&p] - DVec3::Y * (opts.derive.chest_below_armpit_mm / MM_PER_M);
+            shoulder_girth(
+                mesh,
+                [lm.points[&PointId::ShoulderLeft], lm.points[&PointId::ShoulderRight]],
+                [level(PointId::UnderarmLeft), level(PointId::UnderarmRight)],
+                &opts.measure,
+            )
+        } else if id == MeasurementId::ShoulderWidth {
+            lm.points[&PointId::ShoulderLeft].distance(lm.points[&PointId::ShoulderRight])
+        } else if let Some(curve) = id.girth_curve() {
+            let c = derive_curve(mesh, curve, &lm.points, &opts.derive)?;
+            girth_of(&c.polyline, c.plane.as_ref())
+        } else {
+            // lengths and heights: full derivation
+            let body = derive_features(mesh.clone(), &lm, &opts.derive)?;
+            measure(&body, &opts.measure).get(&id).copied().unwrap_or(f64::NAN)
+        };
+        out.push(v);
+    }
+    Ok(out)
+}
+
+/// Solves the small dense system `a x = b` by Gaussian elimination with
+/// partial pivoting; `None` if singular.
+#[expect(clippy::needless_range_loop, reason = "elimination indexes rows and columns as in the formulas")]
+fn solve_dense(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
+    let n = b.len();
+    for c in 0..n {
+        let p = (c..n).max_by(|&i, &j| a[i][c].abs().total_cmp(&a[j][c].abs()))?;
+        if a[p][c].abs() < 1e-300 {
+            return None;
+        }
+        a.swap(c, p);
+        b.swap(c, p);
+        for r in c + 1..n {
+            let f = a[r][c] / a[c][c];
+            for k in c..n {
+                a[r][k] -= f * a[c][k];
+            }
+            b[r] -= f * b[c];
+        }
+    }
+    let mut x = vec![0.0; n];
+    for r in (0..n).rev() {
+        let s: f64 = (r + 1..n).map(|k| a[r][k] * x[k]).sum();
+        x[r] = (b[r] - s) / a[r][r];
+    }
+    Some(x)
+}
+
+/// Fits the embedded mannequin to one size-chart row.
+#[expect(clippy::needless_range_loop, reason = "normal equations index the Jacobian as J[i][p]")]
+pub fn fit_size(model: &BodyModel, row: &SizeRow, opts: &FitOptions) -> Result<FittedMannequin, FitError> {
+    let ids: Vec<MeasurementId> = row.targets.keys().copied().collect();
+    let targets: Vec<f64> = ids.iter().map(|id| row.targets[id]).collect();
+    for &id in &ids {
+        let ok = id == MeasurementId::Stature
+            || id == MeasurementId::ShoulderGirth
+            || id == MeasurementId::ShoulderWidth
+            || id.girth_curve().is_some()
+            || modifier_for(id).is_some();
+        if !ok {
+            return Err(FitError::Unsupported {
+                size: row.size.clone(),
+                measurement: id,
+            });
+        }
+    }
+    // variables
+    let mut vars = vec![Var::Weight];
+    if row.targets.contains_key(&MeasurementId::Stature) {
+        vars.push(Var::Height);
+    }
+    let mods: BTreeSet<&'static str> = ids.iter().filter_map(|&id| modifier_for(id)).collect();
+    let available = model.modifier_names();
+    vars.extend(
+        mods.into_iter()
+            .filter(|m| available.iter().any(|a| a == m))
+            .map(Var::Modifier),
+    );
+    let x0: Vec<f64> = vars
+        .iter()
+        .map(|v| match v {
+            Var::Weight => opts.base.macros.weight,
+            Var::Height => opts.base.macros.height,
+            Var::Modifier(name) => opts.base.modifiers.get(*name).copied().unwrap_or(0.0),
+        })
+        .collect();
+    let mu = opts.prior_weight_mm / MM_PER_M;
+    let eval = |x: &[f64]| -> Result<Vec<f64>, FitError> {
+        let mesh = model.build(&apply(&opts.base, &vars, x))?;
+        let m = quick_measure(model, &mesh, &ids, opts)?;
+        Ok(m.iter().zip(&targets).map(|(a, t)| a - t).collect())
+    };
+    let cost = |r: &[f64], x: &[f64]| -> f64 {
+        r.iter().map(|v| v * v).sum::<f64>() + mu * mu * x.iter().zip(&x0).map(|(a, b)| (a - b).powi(2)).sum::<f64>()
+    };
+    let mut x = x0.clone();
+    let mut r = eval(&x)?;
+    let mut c = cost(&r, &x);
+    let mut lambda = 1e-3;
+    let mut iterations = 0;
+    while iterations < opts.max_iterations {
+        if r.iter().all(|v| v.abs() * MM_PER_M < opts.phase1_tolerance_mm) {
+            break;
+        }
+        iterations += 1;
+        // Jacobian
+        let k = vars.len();
+        let mut jac = vec![vec![0.0; k]; r.len()];
+        for j in 0..k {
+            let (lo, hi) = bounds(vars[j]);
+            let h = if x[j] + opts.fd_step <= hi {
+                opts.fd_step
+            } else {
+                -opts.fd_step
+            };
+            let mut xp = x.clone();
+            xp[j] = (x[j] + h).clamp(lo, hi);
+            let rp = eval(&xp)?;
+            for i in 0..r.len() {
+                jac[i][j] = (rp[i] - r[i]) / h;
+            }
+        }
+        let mut improved = false;
+        for _ in 0..8 {
+            let mut a = vec![vec![0.0; k]; k];
+            let mut g = vec![0.0; k];
+            for p in 0..k {
+                for q in 0..k {
+                    a[p][q] = (0..r.len()).map(|i| jac[i][p] * jac[i][q]).sum();
+                }
+                g[p] = -(0..r.len()).map(|i| jac[i][p] * r[i]).sum::<f64>() - mu * mu * (x[p] - x0[p]);
+            }
+            for p in 0..k {
+                a[p][p] += mu * mu + lambda * a[p][p].max(mu * mu);
+            }
+            let Some(d) = solve_dense(a, g) else { break };
+            let xn: Vec<f64> = (0..k)
+                .map(|j| {
+                    let (lo, hi) = bounds(vars[j]);
+                    (x[j] + d[j]).clamp(lo, hi)
+                })
+                .collect();
+            let rn = eval(&xn)?;
+            let cn = cost(&rn, &xn);
+            if cn < c {
+                x = xn;
+                r = rn;
+                c = cn;
+                lambda = (lambda / 3.0).max(1e-9);
+                improved = true;
+                break;
+            }
+            lambda *= 4.0;
+        }
+        if !improved {
+            break;
+        }
+    }
+    let params = apply(&opts.base, &vars, &x);
+    let base_positions = model.positions(&params)?;
+    let base_mesh = TriMesh::new(base_positions.clone(), model.triangles().to_vec()).map_err(MannequinError::from)?;
+    let lm0 = hm08_landmarks(model, &base_mesh, &opts.landmarks)?;
+    let arms = arm_vertices(&base_mesh, &lm0, opts);
+
+    // phase 2
+    let profiled: Vec<MeasurementId> = ids.iter().copied().filter(|&id| profile_curve(id).is_some()).collect();
+    let mut scales: BTreeMap<MeasurementId, f64> = profiled.iter().map(|&id| (id, 1.0)).collect();
+    let mut body = derive_features(base_mesh.clone(), &lm0, &opts.derive)?;
+    let mut measured = measure(&body, &opts.measure);
+    let mut rounds = 0;
+    // profile geometry from the phase-1 body (centres and heights stay fixed)
+    let profiles: Vec<(MeasurementId, f64, DVec3)> = profiled
+        .iter()
+        .filter_map(|&id| profile_frame(&body, id, opts).map(|(y, o)| (id, y, o)))
+        .collect();
+    while rounds < opts.scaling_iterations {
+        let worst = profiled
+            .iter()
+            .map(|id| (measured.get(id).copied().unwrap_or(f64::NAN) - row.targets[id]).abs() * MM_PER_M)
+            .fold(0.0, f64::max);
+        if worst < opts.girth_tolerance_mm || profiles.is_empty() {
+            break;
+        }
+        rounds += 1;
+        for (id, s) in scales.iter_mut() {
+            if let Some(m) = measured.get(id).filter(|m| **m > 0.0) {
+                *s *= row.targets[id] / m;
+            }
+        }
+        let positions = scale_profiles(&base_positions, &profiles, &scales, &arms, &lm0, opts);
+        let mesh = TriMesh::new(positions, model.triangles().to_vec()).map_err(MannequinError::from)?;
+        let lm = hm08_landmarks(model, &mesh, &opts.landmarks)?;
+        body = derive_features(mesh, &lm, &opts.derive)?;
+        measured = measure(&body, &opts.measure);
+    }
+    let residuals = ids
+        .iter()
+        .map(|&id| {
+            (
+                id,
+                Residual {
+                    target_m: row.targets[&id],
+                    achieved_m: measured.get(&id).copied().unwrap_or(f64::NAN),
+                },
+            )
+        })
+        .collect();
+    Ok(FittedMannequin {
+        size: row.size.clone(),
+        params,
+        profile_scales: scales,
+        body,
+        measurements: measured,
+        residuals,
+        iterations,
+        scaling_rounds: rounds,
+    })
+}
+
+/// Height and centre O of a torso profile.
+fn profile_frame(body: &FeatureBody, id: MeasurementId, opts: &FitOptions) -> Option<(f64, DVec3)> {
+    let bbox_centre = |pts: &mut dyn Iterator<Item = DVec3>| -> Option<DVec3> {
+        let mut lo = DVec3::splat(f64::INFINITY);
+        let mut hi = DVec3::splat(f64::NEG_INFINITY);
+        for p in pts {
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+        lo.is_finite().then(|| 0.5 * (lo + hi))
+    };
+    match profile_curve(id)? {
+        Some(curve) => {
+            let c = body.curves.get(&curve)?;
+            let o = bbox_centre(&mut c.polyline.points.iter().copied())?;
+            Some((o.y, o))
+        }
+        None => {
+            let p = |id: PointId| body.points.get(&id).map(|p| p.position);
+            let (sl, sr, al, ar) = (
+                p(PointId::ShoulderLeft)?,
+                p(PointId::ShoulderRight)?,
+                p(PointId::UnderarmLeft)?,
+                p(PointId::UnderarmRight)?,
+            );
+            let ys = 0.5 * (sl.y + sr.y);
+            let ya = 0.5 * (al.y + ar.y);
+            let y = ys + opts.measure.shoulder_girth_level * (ya - ys);
+            let plane = Plane {
+                normal: DVec3::Y,
+                offset: y,
+            };
+            let loops = slice(&body.mesh, &plane);
+            let o = bbox_centre(&mut loops.iter().flat_map(|s| s.polyline.points.iter().copied()))?;
+            Some((y, o))
+        }
+    }
+}
+
+/// Seed 003 Eq. (1) blending of profile scales, applied to positions.
+fn scale_profiles(
+    positions: &[DVec3],
+    profiles: &[(MeasurementId, f64, DVec3)],
+    scales: &BTreeMap<MeasurementId, f64>,
+    arms: &[ArmSide],
+    lm: &Landmarks,
+    opts: &FitOptions,
+) -> Vec<DVec3> {
+    let mut prof: Vec<(f64, DVec3, f64)> = profiles
+        .iter()
+        .map(|(id, y, o)| (*y, *o, scales.get(id).copied().unwrap_or(1.0)))
+        .collect();
+    prof.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let falloff = opts.blend_falloff_mm / MM_PER_M;
+    let transform = |p: DVec3| -> DVec3 {
+        let (s, o) = blend(&prof, p.y, falloff);
+        DVec3::new(o.x + s * (p.x - o.x), p.y, o.z + s * (p.z - o.z))
+    };
+    let mut out: Vec<DVec3> = positions.iter().map(|&p| transform(p)).collect();
+    for arm in arms {
+        let anchor = lm.points[&arm.shoulder];
+        let d = transform(anchor) - anchor;
+        for &v in &arm.vertices {
+            out[v.idx()] = positions[v.idx()] + d;
+        }
+    }
+    out
+}
+
+/// Scale and centre at height `y`: linear between the neighbouring
+/// profiles (seed 003 Eq. 1), fading to identity beyond the ends.
+fn blend(prof: &[(f64, DVec3, f64)], y: f64, falloff: f64) -> (f64, DVec3) {
+    let Some(first) = prof.first() else {
+        return (1.0, DVec3::ZERO);
+    };
+    let last = prof[prof.len() - 1];
+    if y <= first.0 {
+        let w = if falloff > 0.0 {
+            (1.0 - (first.0 - y) / falloff).max(0.0)
+        } else {
+            0.0
+        };
+        return (1.0 + w * (first.2 - 1.0), first.1);
+    }
+    if y >= last.0 {
+        let w = if falloff > 0.0 {
+            (1.0 - (y - last.0) / falloff).max(0.0)
+        } else {
+            0.0
+        };
+        return (1.0 + w * (last.2 - 1.0), last.1);
+    }
+    for pair in prof.windows(2) {
+        let (a, b) = (pair[0], pair[1]);
+        if y >= a.0 && y <= b.0 {
+            let wb = if b.0 > a.0 { (y - a.0) / (b.0 - a.0) } else { 0.5 };
+            let wa = 1.0 - wb;
+            return (wa * a.2 + wb * b.2, a.1 * wa + b.1 * wb);
+        }
+    }
+    (1.0, first.1)
+}
+
+/// The vertices of one arm and the shoulder point it hangs from.
+#[derive(Debug, Clone)]
+struct ArmSide {
+    shoulder: PointId,
+    vertices: Vec<VertexId>,
+}
+
+/// Arms: flood fill from the most lateral vertex (a fingertip) over the
+/// vertices beyond the armscye plane (moved [`FitOptions::arm_cut_offset_mm`]
+/// outwards). A fill that reaches below the crotch or the midline leaked
+/// into the torso and is dropped (that arm is then scaled with the torso).
+fn arm_vertices(mesh: &TriMesh, lm: &Landmarks, opts: &FitOptions) -> Vec<ArmSide> {
+    let mut adj: Vec<Vec<u32>> = vec![Vec::new(); mesh.vertex_count()];
+    for t in mesh.triangles() {
+        for i in 0..3 {
+            let (a, b) = (t[i].0, t[(i + 1) % 3].0);
+            adj[a as usize].push(b);
+            adj[b as usize].push(a);
+        }
+    }
+    let crotch_y = lm.points.get(&PointId::Crotch).map_or(f64::NEG_INFINITY, |p| p.y);
+    let mut out = Vec::new();
+    for (shoulder, underarm, sign) in [
+        (PointId::ShoulderLeft, PointId::UnderarmLeft, 1.0),
+        (PointId::ShoulderRight, PointId::UnderarmRight, -1.0),
+    ] {
+        let (Some(&s), Some(&u)) = (lm.points.get(&shoulder), lm.points.get(&underarm)) else {
+            continue;
+        };
+        let Some(plane) = Plane::from_point_normal(s, (u - s).cross(DVec3::Z)) else {
+            continue;
+        };
+        let plane = plane.oriented_towards(DVec3::X * sign);
+        let offset = opts.arm_cut_offset_mm / MM_PER_M;
+        let beyond = |v: usize| plane.signed_distance(mesh.positions()[v]) > offset;
+        let Some(seed) = (0..mesh.vertex_count())
+            .max_by(|&a, &b| (mesh.positions()[a].x * sign).total_cmp(&(mesh.positions()[b].x * sign)))
+        else {
+            continue;
+        };
+        let mut seen = vec![false; mesh.vertex_count()];
+        let mut stack = vec![seed];
+        seen[seed] = true;
+        let mut verts = Vec::new();
+        let mut leaked = false;
+        while let Some(v) = stack.pop() {
+            let p = mesh.positions()[v];
+            if p.y < crotch_y || p.x * sign <= 0.0 {
+                leaked = true;
+                break;
+            }
+            verts.push(VertexId(v as u32));
+            for &w in &adj[v] {
+                let w = w as usize;
+                if !seen[w] && beyond(w) {
+                    seen[w] = true;
+                    stack.push(w);
+                }
+            }
+        }
+        if !leaked {
+            out.push(ArmSide {
+                shoulder,
+                vertices: verts,
+            });
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn blend_is_seed003_weighted_mean() {
+        let prof = [(0.0, DVec3::ZERO, 1.2), (1.0, DVec3::X, 0.8)];
+        let (s, o) = blend(&prof, 0.25, 0.1);
+        assert!((s - (0.75 * 1.2 + 0.25 * 0.8)).abs() < 1e-15);
+        assert!((o - DVec3::X * 0.25).length() < 1e-15);
+        assert_eq!(blend(&prof, 2.0, 0.1).0, 1.0);
+        assert!((blend(&prof, -0.05, 0.1).0 - 1.1).abs() < 1e-12);
+    }
+
+    #[test]
+    fn dense_solver() {
+        let x = solve_dense(vec![vec![2.0, 1.0], vec![1.0, 3.0]], vec![3.0, 5.0]).unwrap();
+        assert!((x[0] - 0.8).abs() < 1e-12 && (x[1] - 1.4).abs() < 1e-12);
+        assert!(solve_dense(vec![vec![1.0, 2.0], vec![2.0, 4.0]], vec![1.0, 2.0]).is_none());
+    }
+}
