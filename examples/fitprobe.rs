@@ -18,13 +18,7 @@ fn main() {
         let t = std::time::Instant::now();
         match fit_size(model, row, &FitOptions::default()) {
             Ok(f) => {
-                print!(
-                    "size {:>3} {:?} it {} rounds {} ",
-                    f.size,
-                    t.elapsed(),
-                    f.iterations,
-                    f.scaling_rounds
-                );
+                print!("size {:>3} {:?} it {} rounds {} ", f.size, t.elapsed(), f.iterations, f.scaling_rounds);
                 for (k, r) in &f.residuals {
                     print!("{}={:+.2} ", k, r.error_mm());
                 }

@@ -39,6 +39,12 @@ enum DataCommand {
         #[arg(long, default_value = "templates/mannequin/hm08.bin.gz")]
         out: PathBuf,
     },
+    /// Rebuild fixtures/bodies (8 bodies) and fixtures/astm (12 ASTM D5585 sizes).
+    Fixtures {
+        /// The fixtures folder.
+        #[arg(long, default_value = "fixtures")]
+        dir: PathBuf,
+    },
 }
 
 fn main() -> ExitCode {
@@ -70,9 +76,7 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
                 Ok::<(), Box<dyn std::error::Error>>(())
             })?;
         }
-        Command::Data {
-            what: DataCommand::Mannequin { makehuman, out },
-        } => {
+        Command::Data { what: DataCommand::Mannequin { makehuman, out } } => {
             let data = grade3d::mannequin::data::from_makehuman(&makehuman)?;
             let bytes = grade3d::mannequin::data::encode(&data);
             std::fs::write(&out, &bytes)?;
@@ -86,6 +90,54 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
                 data.rings.len()
             );
         }
+        Command::Data { what: DataCommand::Fixtures { dir } } => write_fixtures(&dir)?,
     }
+    Ok(())
+}
+
+fn write_body(
+    dir: &std::path::Path,
+    name: &str,
+    mesh: &grade3d::geom::mesh::TriMesh,
+    lm: &grade3d::body::derive::Landmarks,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let glb = grade3d::io::gltf::write_glb(mesh, None, &[], "grade3d fixtures")?;
+    std::fs::write(dir.join(format!("{name}.glb")), glb)?;
+    std::fs::write(dir.join(format!("{name}.landmarks.json")), grade3d::io::landmarks::write_landmarks(lm))?;
+    Ok(())
+}
+
+fn write_fixtures(dir: &std::path::Path) -> Result<(), Box<dyn std::error::Error>> {
+    use grade3d::mannequin::{fit, fixtures, landmarks, model::BodyModel, size_chart};
+    let model = BodyModel::embedded()?;
+    let bodies = dir.join("bodies");
+    std::fs::create_dir_all(&bodies)?;
+    let mut manifest = serde_json::Map::new();
+    for f in fixtures::fixture_bodies() {
+        let mesh = model.build(&f.params)?;
+        let lm = landmarks::hm08_landmarks(model, &mesh, &Default::default())?;
+        write_body(&bodies, f.name, &mesh, &lm)?;
+        manifest.insert(f.name.to_owned(), serde_json::to_value(&f.params)?);
+        println!("wrote {}", f.name);
+    }
+    std::fs::write(bodies.join("manifest.json"), serde_json::to_string_pretty(&manifest)? + "\n")?;
+    let astm = dir.join("astm");
+    std::fs::create_dir_all(&astm)?;
+    let chart_text = std::fs::read_to_string(dir.join("size-charts/astm-d5585-11-misses-partial.csv"))?;
+    let chart = size_chart::parse_csv(&chart_text, &Default::default())?;
+    let mut report = serde_json::Map::new();
+    for row in &chart.rows {
+        let fitted = fit::fit_size(model, row, &fit::FitOptions::default())?;
+        let lm = landmarks::hm08_landmarks(model, &fitted.body.mesh, &Default::default())?;
+        write_body(&astm, &format!("size-{}", row.size), &fitted.body.mesh, &lm)?;
+        let residuals: serde_json::Map<String, serde_json::Value> = fitted
+            .residuals
+            .iter()
+            .map(|(k, r)| (k.as_str().to_owned(), serde_json::json!({"target_mm": r.target_m * 1e3, "achieved_mm": r.achieved_m * 1e3, "error_mm": r.error_mm()})))
+            .collect();
+        report.insert(row.size.clone(), serde_json::json!({"params": fitted.params, "profile_scales": fitted.profile_scales.iter().map(|(k, v)| (k.as_str().to_owned(), *v)).collect::<std::collections::BTreeMap<_, _>>(), "residuals": residuals}));
+        println!("wrote size {}", row.size);
+    }
+    std::fs::write(astm.join("fit-report.json"), serde_json::to_string_pretty(&report)? + "\n")?;
     Ok(())
 }

@@ -230,10 +230,7 @@ pub fn derive_features(
     for def in vocab::POINTS {
         let c1 = &curves[&def.f1].polyline;
         let c2 = &curves[&def.f2].polyline;
-        let near = snapped
-            .get(&def.id)
-            .copied()
-            .unwrap_or_else(|| 0.5 * (c1.centroid() + c2.centroid()));
+        let near = snapped.get(&def.id).copied().unwrap_or_else(|| 0.5 * (c1.centroid() + c2.centroid()));
         let gap_tol = 1e-9 * stature;
         let cross = c1.crossing(c2, near, gap_tol).ok_or(FeatureError::CurvesDoNotCross {
             point: def.id,
@@ -249,12 +246,9 @@ pub fn derive_features(
                 gap_mm: cross.gap * MM_PER_M,
             });
         }
-        let position = closest_point(&mesh, cross.point).point;
-        let degenerate = |triple: f64| FeatureError::DegenerateFrame {
-            point: def.id,
-            triple,
-            min: opts.min_frame_triple,
-        };
+        let position = cross.point;
+        let degenerate =
+            |triple: f64| FeatureError::DegenerateFrame { point: def.id, triple, min: opts.min_frame_triple };
         let t1 = c1.tangent_at(cross.s_a, h).ok_or_else(|| degenerate(0.0))?;
         let t2 = c2.tangent_at(cross.s_b, h).ok_or_else(|| degenerate(0.0))?;
         let n = disc_normal(&mesh, position, opts.normal_radius_mm / MM_PER_M).ok_or_else(|| degenerate(0.0))?;
@@ -263,41 +257,22 @@ pub fn derive_features(
         if triple.is_nan() || triple.abs() < opts.min_frame_triple {
             return Err(degenerate(triple));
         }
-        points.insert(
-            def.id,
-            FeaturePoint {
-                position,
-                frame,
-                crossing_gap: cross.gap,
-            },
-        );
+        points.insert(def.id, FeaturePoint { position, frame, crossing_gap: cross.gap });
     }
     Ok(FeatureBody { mesh, curves, points })
 }
 
 fn given_curve(id: CurveId, given: &Polyline) -> Result<FeatureCurve, FeatureError> {
     if given.points.len() < 2 {
-        return Err(FeatureError::BadCurve {
-            curve: id,
-            reason: "fewer than 2 points".into(),
-        });
+        return Err(FeatureError::BadCurve { curve: id, reason: "fewer than 2 points".into() });
     }
     if given.points.iter().any(|p| !p.is_finite()) {
-        return Err(FeatureError::BadCurve {
-            curve: id,
-            reason: "non-finite coordinate".into(),
-        });
+        return Err(FeatureError::BadCurve { curve: id, reason: "non-finite coordinate".into() });
     }
     if given.length() <= 0.0 {
-        return Err(FeatureError::BadCurve {
-            curve: id,
-            reason: "zero length".into(),
-        });
+        return Err(FeatureError::BadCurve { curve: id, reason: "zero length".into() });
     }
-    Ok(FeatureCurve {
-        polyline: given.clone(),
-        plane: None,
-    })
+    Ok(FeatureCurve { polyline: given.clone(), plane: None })
 }
 
 fn mean(points: &[DVec3]) -> DVec3 {
@@ -306,35 +281,22 @@ fn mean(points: &[DVec3]) -> DVec3 {
 
 fn section_plane(curve: CurveId, rule: PlaneRule, pts: &[DVec3], opts: &DeriveOptions) -> Result<Plane, FeatureError> {
     let c = mean(pts);
-    let horizontal = |y: f64| Plane {
-        normal: DVec3::Y,
-        offset: y,
-    };
+    let horizontal = |y: f64| Plane { normal: DVec3::Y, offset: y };
     let plane = match rule {
-        PlaneRule::BestFit => Plane::fit(pts)
-            .map(|p| p.oriented_towards(DVec3::Y))
-            .unwrap_or(horizontal(c.y)),
+        PlaneRule::BestFit => Plane::fit(pts).map(|p| p.oriented_towards(DVec3::Y)).unwrap_or(horizontal(c.y)),
         PlaneRule::Horizontal => horizontal(c.y),
         PlaneRule::HorizontalBelowArmpit => horizontal(c.y - opts.chest_below_armpit_mm / MM_PER_M),
         PlaneRule::Containing(axis) => {
             let (a, b) = match pts {
                 [a, b, ..] => (*a, *b),
-                _ => {
-                    return Err(FeatureError::NoSection {
-                        curve,
-                        reason: "(rule needs two landmarks)".into(),
-                    })
-                }
+                _ => return Err(FeatureError::NoSection { curve, reason: "(rule needs two landmarks)".into() }),
             };
             Plane::from_point_normal(a, (b - a).cross(axis.vector())).ok_or_else(|| FeatureError::NoSection {
                 curve,
                 reason: "(its landmarks lie along the rule's axis)".into(),
             })?
         }
-        PlaneRule::Normal(axis) => Plane {
-            normal: axis.vector(),
-            offset: axis.vector().dot(pts[0]),
-        },
+        PlaneRule::Normal(axis) => Plane { normal: axis.vector(), offset: axis.vector().dot(pts[0]) },
     };
     Ok(plane)
 }
@@ -366,19 +328,11 @@ fn curve_by_rule(
     opts: &DeriveOptions,
 ) -> Result<FeatureCurve, FeatureError> {
     match *rule {
-        CurveRule::Section {
-            landmarks,
-            plane,
-            choice,
-            orientation,
-        } => {
+        CurveRule::Section { landmarks, plane, choice, orientation } => {
             let pts: Vec<DVec3> = landmarks.iter().map(|p| snapped[p]).collect();
             let plane = section_plane(id, plane, &pts, opts)?;
-            let loops: Vec<Polyline> = slice(mesh, &plane)
-                .into_iter()
-                .map(|s| s.polyline)
-                .filter(|p| p.points.len() >= 3)
-                .collect();
+            let loops: Vec<Polyline> =
+                slice(mesh, &plane).into_iter().map(|s| s.polyline).filter(|p| p.points.len() >= 3).collect();
             let centre = plane.project(mean(&pts));
             let chosen = match choice {
                 LoopChoice::Encloses => loops
@@ -402,10 +356,7 @@ fn curve_by_rule(
             if poly.signed_area(orientation.vector()) < 0.0 {
                 poly = poly.reversed();
             }
-            Ok(FeatureCurve {
-                polyline: poly,
-                plane: Some(plane),
-            })
+            Ok(FeatureCurve { polyline: poly, plane: Some(plane) })
         }
         CurveRule::Path { landmarks, depth } => {
             let mut out: Vec<DVec3> = Vec::new();
@@ -421,10 +372,7 @@ fn curve_by_rule(
                 let skip = usize::from(!out.is_empty());
                 out.extend(piece.points.into_iter().skip(skip));
             }
-            Ok(FeatureCurve {
-                polyline: Polyline::new(out, false),
-                plane: None,
-            })
+            Ok(FeatureCurve { polyline: Polyline::new(out, false), plane: None })
         }
     }
 }
@@ -442,11 +390,7 @@ fn path_piece(mesh: &TriMesh, a: DVec3, b: DVec3, d: DVec3, extend: (f64, f64)) 
         .min_by(|x, y| (dist(x, a) + dist(x, b)).total_cmp(&(dist(y, a) + dist(y, b))))?;
     let sa = best.closest(a)?.s;
     let sb = best.closest(b)?.s;
-    let forward = if best.closed {
-        best.arc(sa, sb).length() <= best.arc(sb, sa).length()
-    } else {
-        sa <= sb
-    };
+    let forward = if best.closed { best.arc(sa, sb).length() <= best.arc(sb, sa).length() } else { sa <= sb };
     let arc = if forward {
         best.arc(sa - extend.0, sb + extend.1)
     } else {

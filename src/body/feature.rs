@@ -101,11 +101,7 @@ mod tests {
         };
         let (a, b, c) = f.coordinates(DVec3::new(0.3, -0.7, 1.1)).unwrap();
         assert!((f.offset(a, b, c) - DVec3::new(0.3, -0.7, 1.1)).length() < 1e-14);
-        let flat = Frame {
-            t1: DVec3::X,
-            t2: DVec3::Y,
-            n: DVec3::X,
-        };
+        let flat = Frame { t1: DVec3::X, t2: DVec3::Y, n: DVec3::X };
         assert!(flat.coordinates(DVec3::ONE).is_none());
         assert_eq!(flat.triple(), 0.0);
     }

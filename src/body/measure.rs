@@ -40,9 +40,7 @@ pub struct MeasureOptions {
 
 impl Default for MeasureOptions {
     fn default() -> Self {
-        Self {
-            shoulder_girth_level: 0.25,
-        }
+        Self { shoulder_girth_level: 0.25 }
     }
 }
 
@@ -169,10 +167,7 @@ pub fn girth_of(poly: &Polyline, plane: Option<&Plane>) -> f64 {
 pub fn shoulder_girth(mesh: &TriMesh, shoulders: [DVec3; 2], armpits: [DVec3; 2], opts: &MeasureOptions) -> f64 {
     let ys = 0.5 * (shoulders[0].y + shoulders[1].y);
     let ya = 0.5 * (armpits[0].y + armpits[1].y);
-    let plane = Plane {
-        normal: DVec3::Y,
-        offset: ys + opts.shoulder_girth_level * (ya - ys),
-    };
+    let plane = Plane { normal: DVec3::Y, offset: ys + opts.shoulder_girth_level * (ya - ys) };
     let loops = slice(mesh, &plane);
     let polys: Vec<&Polyline> = loops.iter().map(|s| &s.polyline).collect();
     tape_length(&polys, &plane)
@@ -197,16 +192,10 @@ pub fn measure(body: &FeatureBody, opts: &MeasureOptions) -> Measurements {
         }
     }
     let p = |id: PointId| body.points.get(&id).map(|p| p.position);
-    if let (Some(sl), Some(sr), Some(al), Some(ar)) = (
-        p(PointId::ShoulderLeft),
-        p(PointId::ShoulderRight),
-        p(PointId::UnderarmLeft),
-        p(PointId::UnderarmRight),
-    ) {
-        m.insert(
-            MeasurementId::ShoulderGirth,
-            shoulder_girth(&body.mesh, [sl, sr], [al, ar], opts),
-        );
+    if let (Some(sl), Some(sr), Some(al), Some(ar)) =
+        (p(PointId::ShoulderLeft), p(PointId::ShoulderRight), p(PointId::UnderarmLeft), p(PointId::UnderarmRight))
+    {
+        m.insert(MeasurementId::ShoulderGirth, shoulder_girth(&body.mesh, [sl, sr], [al, ar], opts));
         m.insert(MeasurementId::ShoulderWidth, sl.distance(sr));
     }
     if let (Some(wf), Some(wb)) = (p(PointId::WaistFront), p(PointId::WaistBack)) {
@@ -219,21 +208,16 @@ pub fn measure(body: &FeatureBody, opts: &MeasureOptions) -> Measurements {
         m.insert(MeasurementId::CrotchHeight, c.y - floor);
     }
     let curve = |id: CurveId| body.curves.get(&id).map(|c| &c.polyline);
-    if let (Some(line), Some(a), Some(b)) = (
-        curve(CurveId::ShoulderLineLeft),
-        p(PointId::NeckLeft),
-        p(PointId::ShoulderLeft),
-    ) {
+    if let (Some(line), Some(a), Some(b)) =
+        (curve(CurveId::ShoulderLineLeft), p(PointId::NeckLeft), p(PointId::ShoulderLeft))
+    {
         m.insert(MeasurementId::ShoulderLength, arc_between(line, a, b));
     }
     if let (Some(line), Some(a), Some(b)) = (curve(CurveId::CentreBack), p(PointId::NeckBack), p(PointId::WaistBack)) {
         m.insert(MeasurementId::BackLength, arc_between(line, a, b));
     }
-    if let (Some(line), Some(a), Some(b)) = (
-        curve(CurveId::CentreFront),
-        p(PointId::NeckFront),
-        p(PointId::WaistFront),
-    ) {
+    if let (Some(line), Some(a), Some(b)) = (curve(CurveId::CentreFront), p(PointId::NeckFront), p(PointId::WaistFront))
+    {
         m.insert(MeasurementId::FrontLength, arc_between(line, a, b));
     }
     m

@@ -304,12 +304,7 @@ const WAIST: [P; 4] = girth4(P::WaistFront, P::WaistBack, P::WaistLeft, P::Waist
 const HIP: [P; 4] = girth4(P::HipFront, P::HipBack, P::HipLeft, P::HipRight);
 
 const fn section(landmarks: &'static [P], plane: PlaneRule, choice: LoopChoice, orientation: Axis) -> CurveRule {
-    CurveRule::Section {
-        landmarks,
-        plane,
-        choice,
-        orientation,
-    }
+    CurveRule::Section { landmarks, plane, choice, orientation }
 }
 
 /// Every curve of vocabulary version [`VOCABULARY_VERSION`].
@@ -403,14 +398,7 @@ pub const CURVES: &[CurveDef] = &[
         id: CurveId::CentreFront,
         name: "centre front line",
         rule: CurveRule::Path {
-            landmarks: &[
-                P::NeckFront,
-                P::BustFront,
-                P::UnderbustFront,
-                P::WaistFront,
-                P::HipFront,
-                P::Crotch,
-            ],
+            landmarks: &[P::NeckFront, P::BustFront, P::UnderbustFront, P::WaistFront, P::HipFront, P::Crotch],
             depth: Axis::Z,
         },
     },
@@ -418,14 +406,7 @@ pub const CURVES: &[CurveDef] = &[
         id: CurveId::CentreBack,
         name: "centre back line",
         rule: CurveRule::Path {
-            landmarks: &[
-                P::NeckBack,
-                P::BustBack,
-                P::UnderbustBack,
-                P::WaistBack,
-                P::HipBack,
-                P::Crotch,
-            ],
+            landmarks: &[P::NeckBack, P::BustBack, P::UnderbustBack, P::WaistBack, P::HipBack, P::Crotch],
             depth: Axis::Z,
         },
     },
@@ -466,18 +447,12 @@ pub const CURVES: &[CurveDef] = &[
     CurveDef {
         id: CurveId::ShoulderLineLeft,
         name: "left shoulder line",
-        rule: CurveRule::Path {
-            landmarks: &[P::NeckLeft, P::ShoulderLeft],
-            depth: Axis::Y,
-        },
+        rule: CurveRule::Path { landmarks: &[P::NeckLeft, P::ShoulderLeft], depth: Axis::Y },
     },
     CurveDef {
         id: CurveId::ShoulderLineRight,
         name: "right shoulder line",
-        rule: CurveRule::Path {
-            landmarks: &[P::NeckRight, P::ShoulderRight],
-            depth: Axis::Y,
-        },
+        rule: CurveRule::Path { landmarks: &[P::NeckRight, P::ShoulderRight], depth: Axis::Y },
     },
     CurveDef {
         id: CurveId::CrotchLine,
@@ -492,154 +467,39 @@ const fn pt(id: P, name: &'static str, f1: CurveId, f2: CurveId) -> PointDef {
 
 /// Every feature point of vocabulary version [`VOCABULARY_VERSION`].
 pub const POINTS: &[PointDef] = &[
-    pt(
-        P::NeckFront,
-        "front neck point",
-        CurveId::NeckBase,
-        CurveId::CentreFront,
-    ),
-    pt(
-        P::NeckBack,
-        "back neck point (cervicale)",
-        CurveId::NeckBase,
-        CurveId::CentreBack,
-    ),
-    pt(
-        P::NeckLeft,
-        "left side neck point",
-        CurveId::NeckBase,
-        CurveId::ShoulderLineLeft,
-    ),
-    pt(
-        P::NeckRight,
-        "right side neck point",
-        CurveId::NeckBase,
-        CurveId::ShoulderLineRight,
-    ),
-    pt(
-        P::ShoulderLeft,
-        "left shoulder point (acromion)",
-        CurveId::ShoulderLineLeft,
-        CurveId::ArmscyeLeft,
-    ),
-    pt(
-        P::ShoulderRight,
-        "right shoulder point (acromion)",
-        CurveId::ShoulderLineRight,
-        CurveId::ArmscyeRight,
-    ),
-    pt(
-        P::UnderarmLeft,
-        "left armpit point",
-        CurveId::Chest,
-        CurveId::SideLineLeft,
-    ),
-    pt(
-        P::UnderarmRight,
-        "right armpit point",
-        CurveId::Chest,
-        CurveId::SideLineRight,
-    ),
+    pt(P::NeckFront, "front neck point", CurveId::NeckBase, CurveId::CentreFront),
+    pt(P::NeckBack, "back neck point (cervicale)", CurveId::NeckBase, CurveId::CentreBack),
+    pt(P::NeckLeft, "left side neck point", CurveId::NeckBase, CurveId::ShoulderLineLeft),
+    pt(P::NeckRight, "right side neck point", CurveId::NeckBase, CurveId::ShoulderLineRight),
+    pt(P::ShoulderLeft, "left shoulder point (acromion)", CurveId::ShoulderLineLeft, CurveId::ArmscyeLeft),
+    pt(P::ShoulderRight, "right shoulder point (acromion)", CurveId::ShoulderLineRight, CurveId::ArmscyeRight),
+    pt(P::UnderarmLeft, "left armpit point", CurveId::Chest, CurveId::SideLineLeft),
+    pt(P::UnderarmRight, "right armpit point", CurveId::Chest, CurveId::SideLineRight),
     pt(P::ChestFront, "chest front point", CurveId::Chest, CurveId::CentreFront),
     pt(P::ChestBack, "chest back point", CurveId::Chest, CurveId::CentreBack),
     pt(P::BustFront, "bust front point", CurveId::Bust, CurveId::CentreFront),
     pt(P::BustBack, "bust back point", CurveId::Bust, CurveId::CentreBack),
-    pt(
-        P::BustLeft,
-        "bust left side point",
-        CurveId::Bust,
-        CurveId::SideLineLeft,
-    ),
-    pt(
-        P::BustRight,
-        "bust right side point",
-        CurveId::Bust,
-        CurveId::SideLineRight,
-    ),
-    pt(
-        P::UnderbustFront,
-        "underbust front point",
-        CurveId::Underbust,
-        CurveId::CentreFront,
-    ),
-    pt(
-        P::UnderbustBack,
-        "underbust back point",
-        CurveId::Underbust,
-        CurveId::CentreBack,
-    ),
-    pt(
-        P::UnderbustLeft,
-        "underbust left side point",
-        CurveId::Underbust,
-        CurveId::SideLineLeft,
-    ),
-    pt(
-        P::UnderbustRight,
-        "underbust right side point",
-        CurveId::Underbust,
-        CurveId::SideLineRight,
-    ),
+    pt(P::BustLeft, "bust left side point", CurveId::Bust, CurveId::SideLineLeft),
+    pt(P::BustRight, "bust right side point", CurveId::Bust, CurveId::SideLineRight),
+    pt(P::UnderbustFront, "underbust front point", CurveId::Underbust, CurveId::CentreFront),
+    pt(P::UnderbustBack, "underbust back point", CurveId::Underbust, CurveId::CentreBack),
+    pt(P::UnderbustLeft, "underbust left side point", CurveId::Underbust, CurveId::SideLineLeft),
+    pt(P::UnderbustRight, "underbust right side point", CurveId::Underbust, CurveId::SideLineRight),
     pt(P::WaistFront, "front waist point", CurveId::Waist, CurveId::CentreFront),
     pt(P::WaistBack, "back waist point", CurveId::Waist, CurveId::CentreBack),
-    pt(
-        P::WaistLeft,
-        "left side waist point",
-        CurveId::Waist,
-        CurveId::SideLineLeft,
-    ),
-    pt(
-        P::WaistRight,
-        "right side waist point",
-        CurveId::Waist,
-        CurveId::SideLineRight,
-    ),
+    pt(P::WaistLeft, "left side waist point", CurveId::Waist, CurveId::SideLineLeft),
+    pt(P::WaistRight, "right side waist point", CurveId::Waist, CurveId::SideLineRight),
     pt(P::HipFront, "front hip point", CurveId::Hip, CurveId::CentreFront),
     pt(P::HipBack, "back hip point", CurveId::Hip, CurveId::CentreBack),
     pt(P::HipLeft, "left side hip point", CurveId::Hip, CurveId::SideLineLeft),
-    pt(
-        P::HipRight,
-        "right side hip point",
-        CurveId::Hip,
-        CurveId::SideLineRight,
-    ),
+    pt(P::HipRight, "right side hip point", CurveId::Hip, CurveId::SideLineRight),
     pt(P::Crotch, "crotch point", CurveId::CentreFront, CurveId::CrotchLine),
-    pt(
-        P::ThighLeft,
-        "left thigh side point",
-        CurveId::ThighLeft,
-        CurveId::SideLineLeft,
-    ),
-    pt(
-        P::ThighRight,
-        "right thigh side point",
-        CurveId::ThighRight,
-        CurveId::SideLineRight,
-    ),
-    pt(
-        P::KneeLeft,
-        "left knee side point",
-        CurveId::KneeLeft,
-        CurveId::SideLineLeft,
-    ),
-    pt(
-        P::KneeRight,
-        "right knee side point",
-        CurveId::KneeRight,
-        CurveId::SideLineRight,
-    ),
-    pt(
-        P::AnkleLeft,
-        "left ankle side point",
-        CurveId::AnkleLeft,
-        CurveId::SideLineLeft,
-    ),
-    pt(
-        P::AnkleRight,
-        "right ankle side point",
-        CurveId::AnkleRight,
-        CurveId::SideLineRight,
-    ),
+    pt(P::ThighLeft, "left thigh side point", CurveId::ThighLeft, CurveId::SideLineLeft),
+    pt(P::ThighRight, "right thigh side point", CurveId::ThighRight, CurveId::SideLineRight),
+    pt(P::KneeLeft, "left knee side point", CurveId::KneeLeft, CurveId::SideLineLeft),
+    pt(P::KneeRight, "right knee side point", CurveId::KneeRight, CurveId::SideLineRight),
+    pt(P::AnkleLeft, "left ankle side point", CurveId::AnkleLeft, CurveId::SideLineLeft),
+    pt(P::AnkleRight, "right ankle side point", CurveId::AnkleRight, CurveId::SideLineRight),
 ];
 
 /// The registry entry of a curve.

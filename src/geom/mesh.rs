@@ -120,11 +120,7 @@ impl TriMesh {
             let mut ids = [VertexId(0); 3];
             for (k, &i) in t.iter().enumerate() {
                 if i >= n as u64 {
-                    return Err(MeshError::IndexOutOfRange {
-                        face,
-                        index: i,
-                        count: n,
-                    });
+                    return Err(MeshError::IndexOutOfRange { face, index: i, count: n });
                 }
                 ids[k] = VertexId(i as u32);
             }
@@ -136,15 +132,10 @@ impl TriMesh {
     /// Validates and builds a mesh.
     pub fn new(positions: Vec<DVec3>, triangles: Vec<[VertexId; 3]>) -> Result<Self, MeshError> {
         if positions.is_empty() || triangles.is_empty() {
-            return Err(MeshError::Empty {
-                vertices: positions.len(),
-                triangles: triangles.len(),
-            });
+            return Err(MeshError::Empty { vertices: positions.len(), triangles: triangles.len() });
         }
         if positions.len() > u32::MAX as usize || triangles.len() > u32::MAX as usize {
-            return Err(MeshError::TooLarge {
-                count: positions.len().max(triangles.len()),
-            });
+            return Err(MeshError::TooLarge { count: positions.len().max(triangles.len()) });
         }
         if let Some(v) = positions.iter().position(|p| !p.is_finite()) {
             return Err(MeshError::NonFinite { vertex: v as u32 });
@@ -153,24 +144,14 @@ impl TriMesh {
         for (f, t) in triangles.iter().enumerate() {
             for v in t {
                 if v.idx() >= n {
-                    return Err(MeshError::IndexOutOfRange {
-                        face: f as u32,
-                        index: u64::from(v.0),
-                        count: n,
-                    });
+                    return Err(MeshError::IndexOutOfRange { face: f as u32, index: u64::from(v.0), count: n });
                 }
             }
             if t[0] == t[1] || t[0] == t[2] {
-                return Err(MeshError::RepeatedVertex {
-                    face: f as u32,
-                    vertex: t[0].0,
-                });
+                return Err(MeshError::RepeatedVertex { face: f as u32, vertex: t[0].0 });
             }
             if t[1] == t[2] {
-                return Err(MeshError::RepeatedVertex {
-                    face: f as u32,
-                    vertex: t[1].0,
-                });
+                return Err(MeshError::RepeatedVertex { face: f as u32, vertex: t[1].0 });
             }
         }
         Ok(Self { positions, triangles })
@@ -229,9 +210,7 @@ impl TriMesh {
 
     /// Total surface area.
     pub fn area(&self) -> f64 {
-        (0..self.triangles.len())
-            .map(|f| 0.5 * self.face_area_vector(FaceId(f as u32)).length())
-            .sum()
+        (0..self.triangles.len()).map(|f| 0.5 * self.face_area_vector(FaceId(f as u32)).length()).sum()
     }
 
     /// Area-weighted unit vertex normals (zero for isolated vertices).
@@ -322,19 +301,9 @@ mod tests {
     fn rejects_bad_input_with_named_element() {
         assert!(matches!(TriMesh::from_raw(vec![], &[]), Err(MeshError::Empty { .. })));
         let e = TriMesh::from_raw(vec![DVec3::ZERO, DVec3::X, DVec3::Y], &[[0, 1, 7]]).unwrap_err();
-        assert_eq!(
-            e,
-            MeshError::IndexOutOfRange {
-                face: 0,
-                index: 7,
-                count: 3
-            }
-        );
-        let e = TriMesh::from_raw(
-            vec![DVec3::ZERO, DVec3::new(f64::NAN, 0.0, 0.0), DVec3::Y],
-            &[[0, 1, 2]],
-        )
-        .unwrap_err();
+        assert_eq!(e, MeshError::IndexOutOfRange { face: 0, index: 7, count: 3 });
+        let e =
+            TriMesh::from_raw(vec![DVec3::ZERO, DVec3::new(f64::NAN, 0.0, 0.0), DVec3::Y], &[[0, 1, 2]]).unwrap_err();
         assert_eq!(e, MeshError::NonFinite { vertex: 1 });
         let e = TriMesh::from_raw(vec![DVec3::ZERO, DVec3::X, DVec3::Y], &[[0, 1, 1]]).unwrap_err();
         assert_eq!(e, MeshError::RepeatedVertex { face: 0, vertex: 1 });

@@ -29,10 +29,7 @@ impl Plane {
     /// Returns `None` for a zero or non-finite normal.
     pub fn from_point_normal(point: DVec3, normal: DVec3) -> Option<Self> {
         let n = normal.try_normalize()?;
-        Some(Self {
-            normal: n,
-            offset: n.dot(point),
-        })
+        Some(Self { normal: n, offset: n.dot(point) })
     }
 
     /// Signed distance `n·x − d`.
@@ -49,10 +46,7 @@ impl Plane {
 
     /// The same plane with the normal pointing the other way.
     pub fn flipped(&self) -> Self {
-        Self {
-            normal: -self.normal,
-            offset: -self.offset,
-        }
+        Self { normal: -self.normal, offset: -self.offset }
     }
 
     /// The same plane oriented so that `normal · towards ≥ 0`.
@@ -152,9 +146,7 @@ mod tests {
         let plane = Plane::from_point_normal(DVec3::new(0.1, 1.0, 0.2), n).unwrap();
         let (u, v) = plane.basis();
         let o = plane.project(DVec3::ZERO);
-        let pts: Vec<DVec3> = (0..20)
-            .map(|i| o + u * (i as f64).sin() + v * (i as f64 * 0.7).cos())
-            .collect();
+        let pts: Vec<DVec3> = (0..20).map(|i| o + u * (i as f64).sin() + v * (i as f64 * 0.7).cos()).collect();
         let fit = Plane::fit(&pts).unwrap().oriented_towards(n);
         assert!((fit.normal - n).length() < 1e-12);
         assert!((fit.offset - plane.offset).abs() < 1e-12);

@@ -68,11 +68,7 @@ pub fn segment_segment(p0: DVec3, p1: DVec3, q0: DVec3, q1: DVec3) -> (f64, f64)
     }
     let b = d1.dot(d2);
     let denom = a * e - b * b;
-    let mut s = if denom > 1e-14 * a * e {
-        ((b * f - c * e) / denom).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
+    let mut s = if denom > 1e-14 * a * e { ((b * f - c * e) / denom).clamp(0.0, 1.0) } else { 0.0 };
     let mut t = (b * s + f) / e;
     if t < 0.0 {
         t = 0.0;
@@ -197,11 +193,7 @@ impl Polyline {
         let cum = self.cumulative();
         let mut best: Option<ClosestOnPolyline> = None;
         if self.segment_count() == 0 {
-            return self.points.first().map(|&q| ClosestOnPolyline {
-                s: 0.0,
-                point: q,
-                distance: q.distance(p),
-            });
+            return self.points.first().map(|&q| ClosestOnPolyline { s: 0.0, point: q, distance: q.distance(p) });
         }
         for i in 0..self.segment_count() {
             let (a, b) = self.segment(i);
@@ -209,11 +201,7 @@ impl Polyline {
             let q = a.lerp(b, t);
             let d = q.distance(p);
             if best.is_none_or(|c| d < c.distance) {
-                best = Some(ClosestOnPolyline {
-                    s: cum[i] + t * (cum[i + 1] - cum[i]),
-                    point: q,
-                    distance: d,
-                });
+                best = Some(ClosestOnPolyline { s: cum[i] + t * (cum[i + 1] - cum[i]), point: q, distance: d });
             }
         }
         best
@@ -223,10 +211,7 @@ impl Polyline {
     pub fn reversed(&self) -> Self {
         let mut pts = self.points.clone();
         pts.reverse();
-        Self {
-            points: pts,
-            closed: self.closed,
-        }
+        Self { points: pts, closed: self.closed }
     }
 
     /// The open sub-arc from `s0` to `s1`, walking forward. On a closed
@@ -408,10 +393,7 @@ mod tests {
 
     fn circle(r: f64, n: usize) -> Polyline {
         Polyline::new(
-            (0..n)
-                .map(|i| 2.0 * PI * i as f64 / n as f64)
-                .map(|t| DVec3::new(r * t.cos(), 0.0, r * t.sin()))
-                .collect(),
+            (0..n).map(|i| 2.0 * PI * i as f64 / n as f64).map(|t| DVec3::new(r * t.cos(), 0.0, r * t.sin())).collect(),
             true,
         )
     }

@@ -74,11 +74,7 @@ pub fn closest_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
 
 /// The closest point of `mesh` to `p`.
 pub fn closest_point(mesh: &TriMesh, p: DVec3) -> SurfacePoint {
-    let mut best = SurfacePoint {
-        face: FaceId(0),
-        point: DVec3::ZERO,
-        distance: f64::INFINITY,
-    };
+    let mut best = SurfacePoint { face: FaceId(0), point: DVec3::ZERO, distance: f64::INFINITY };
     for f in 0..mesh.face_count() {
         let face = FaceId(f as u32);
         let [a, b, c] = mesh.corners(face);
@@ -91,11 +87,7 @@ pub fn closest_point(mesh: &TriMesh, p: DVec3) -> SurfacePoint {
         let q = closest_on_triangle(p, a, b, c);
         let d = q.distance(p);
         if d < best.distance {
-            best = SurfacePoint {
-                face,
-                point: q,
-                distance: d,
-            };
+            best = SurfacePoint { face, point: q, distance: d };
         }
     }
     best
@@ -119,8 +111,7 @@ pub fn disc_normal(mesh: &TriMesh, p: DVec3, radius: f64) -> Option<DVec3> {
             sum += mesh.face_area_vector(face);
         }
     }
-    sum.try_normalize()
-        .or_else(|| mesh.face_area_vector(closest_point(mesh, p).face).try_normalize())
+    sum.try_normalize().or_else(|| mesh.face_area_vector(closest_point(mesh, p).face).try_normalize())
 }
 
 #[cfg(test)]
@@ -131,14 +122,8 @@ mod tests {
     fn closest_on_triangle_regions() {
         let (a, b, c) = (DVec3::ZERO, DVec3::X, DVec3::Y);
         assert_eq!(closest_on_triangle(DVec3::new(-1.0, -1.0, 3.0), a, b, c), a);
-        assert_eq!(
-            closest_on_triangle(DVec3::new(0.25, 0.25, 3.0), a, b, c),
-            DVec3::new(0.25, 0.25, 0.0)
-        );
-        assert_eq!(
-            closest_on_triangle(DVec3::new(0.5, -2.0, 0.0), a, b, c),
-            DVec3::new(0.5, 0.0, 0.0)
-        );
+        assert_eq!(closest_on_triangle(DVec3::new(0.25, 0.25, 3.0), a, b, c), DVec3::new(0.25, 0.25, 0.0));
+        assert_eq!(closest_on_triangle(DVec3::new(0.5, -2.0, 0.0), a, b, c), DVec3::new(0.5, 0.0, 0.0));
         let q = closest_on_triangle(DVec3::new(1.0, 1.0, 0.0), a, b, c);
         assert!((q - DVec3::new(0.5, 0.5, 0.0)).length() < 1e-15);
     }

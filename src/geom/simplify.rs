@@ -359,19 +359,10 @@ fn analyse(mesh: &TriMesh) -> Result<Analysis, SimplifyError> {
             }
             2 => {
                 if half[i + 1].2 == fwd {
-                    return Err(SimplifyError::InconsistentOrientation {
-                        a: VertexId(lo),
-                        b: VertexId(hi),
-                    });
+                    return Err(SimplifyError::InconsistentOrientation { a: VertexId(lo), b: VertexId(hi) });
                 }
             }
-            k => {
-                return Err(SimplifyError::NonManifoldEdge {
-                    a: VertexId(lo),
-                    b: VertexId(hi),
-                    faces: k,
-                })
-            }
+            k => return Err(SimplifyError::NonManifoldEdge { a: VertexId(lo), b: VertexId(hi), faces: k }),
         }
         edges.push((lo, hi));
         i = j;
@@ -390,10 +381,7 @@ fn analyse(mesh: &TriMesh) -> Result<Analysis, SimplifyError> {
     keyed.sort_unstable();
     for w in keyed.windows(2) {
         if w[0].0 == w[1].0 {
-            return Err(SimplifyError::DuplicateFace {
-                first: FaceId(w[0].1),
-                second: FaceId(w[1].1),
-            });
+            return Err(SimplifyError::DuplicateFace { first: FaceId(w[0].1), second: FaceId(w[1].1) });
         }
     }
 
@@ -432,10 +420,7 @@ fn analyse(mesh: &TriMesh) -> Result<Analysis, SimplifyError> {
         link.sort_unstable();
         let fans = count_fans(&link);
         if fans != 1 {
-            return Err(SimplifyError::NonManifoldVertex {
-                vertex: VertexId(v as u32),
-                fans,
-            });
+            return Err(SimplifyError::NonManifoldVertex { vertex: VertexId(v as u32), fans });
         }
     }
 
@@ -466,9 +451,7 @@ fn analyse(mesh: &TriMesh) -> Result<Analysis, SimplifyError> {
             parent[ra.max(rb) as usize] = ra.min(rb);
         }
     }
-    let components = (0..n)
-        .filter(|&v| start[v + 1] > start[v] && find(&mut parent, v as u32) == v as u32)
-        .count();
+    let components = (0..n).filter(|&v| start[v + 1] > start[v] && find(&mut parent, v as u32) == v as u32).count();
 
     let stats = ManifoldStats {
         vertices: referenced,
@@ -480,11 +463,7 @@ fn analyse(mesh: &TriMesh) -> Result<Analysis, SimplifyError> {
         components,
         euler_characteristic: referenced as i64 - edges.len() as i64 + tris.len() as i64,
     };
-    Ok(Analysis {
-        edges,
-        boundary_halfedges,
-        stats,
-    })
+    Ok(Analysis { edges, boundary_halfedges, stats })
 }
 
 /// Number of connected pieces of a vertex link given as directed edges
@@ -594,11 +573,8 @@ impl Quadric {
     /// Minimiser of `vᵀ Q v` when the 3×3 block is well conditioned.
     fn minimiser(&self) -> Option<DVec3> {
         let q = &self.0;
-        let a = DMat3::from_cols(
-            DVec3::new(q[0], q[1], q[2]),
-            DVec3::new(q[1], q[4], q[5]),
-            DVec3::new(q[2], q[5], q[7]),
-        );
+        let a =
+            DMat3::from_cols(DVec3::new(q[0], q[1], q[2]), DVec3::new(q[1], q[4], q[5]), DVec3::new(q[2], q[5], q[7]));
         let tr = q[0] + q[4] + q[7];
         if tr.partial_cmp(&0.0) != Some(Ordering::Greater) {
             return None;
@@ -850,26 +826,13 @@ impl<'a> State<'a> {
         let (pa, pb) = (self.pos[ai], self.pos[bi]);
         let at = |target: DVec3| {
             // the survivor is the endpoint nearer to the new position
-            let (keep, remove) = if target.distance_squared(pb) < target.distance_squared(pa) {
-                (b, a)
-            } else {
-                (a, b)
-            };
-            Plan {
-                keep,
-                remove,
-                target,
-                cost: q.eval(target - self.origin),
-            }
+            let (keep, remove) =
+                if target.distance_squared(pb) < target.distance_squared(pa) { (b, a) } else { (a, b) };
+            Plan { keep, remove, target, cost: q.eval(target - self.origin) }
         };
         let fixed_at = |keep: u32, remove: u32| {
             let target = self.pos[keep as usize];
-            Plan {
-                keep,
-                remove,
-                target,
-                cost: q.eval(target - self.origin),
-            }
+            Plan { keep, remove, target, cost: q.eval(target - self.origin) }
         };
         match (self.pinned[ai], self.pinned[bi]) {
             (true, true) => {}
@@ -883,11 +846,7 @@ impl<'a> State<'a> {
             (false, false) => {
                 let mid = 0.5 * (pa + pb);
                 let len = pa.distance(pb);
-                if let Some(x) = q
-                    .minimiser()
-                    .map(|x| x + self.origin)
-                    .filter(|x| x.distance(mid) <= len)
-                {
+                if let Some(x) = q.minimiser().map(|x| x + self.origin).filter(|x| x.distance(mid) <= len) {
                     out.push(at(x));
                 }
                 let mut rest = [at(pa), at(pb), at(mid)];
@@ -927,13 +886,7 @@ impl<'a> State<'a> {
         // Link condition.
         let mut opp: Vec<u32> = ef
             .iter()
-            .map(|&f| {
-                self.faces[f as usize]
-                    .iter()
-                    .copied()
-                    .find(|&x| x != u && x != v)
-                    .unwrap_or(u32::MAX)
-            })
+            .map(|&f| self.faces[f as usize].iter().copied().find(|&x| x != u && x != v).unwrap_or(u32::MAX))
             .collect();
         opp.sort_unstable();
         let (nu, nv) = (self.neighbours(u), self.neighbours(v));
@@ -1074,11 +1027,7 @@ impl<'a> State<'a> {
             let t = self.faces[f as usize];
             (0..3).any(|k| t[k] == a && t[(k + 1) % 3] == b)
         };
-        let (f1, f2) = if has(ef[0], x, l) {
-            (ef[0], ef[1])
-        } else {
-            (ef[1], ef[0])
-        };
+        let (f1, f2) = if has(ef[0], x, l) { (ef[0], ef[1]) } else { (ef[1], ef[0]) };
         let third = |f: u32| self.faces[f as usize].iter().copied().find(|&y| y != x && y != l);
         let (p, q) = (third(f1)?, third(f2)?);
         if p == q || self.neighbours(p).binary_search(&q).is_ok() {
@@ -1189,9 +1138,7 @@ impl<'a> State<'a> {
     }
 
     fn free_remaining(&self) -> usize {
-        (0..self.alive.len())
-            .filter(|&v| self.alive[v] && !self.pinned[v] && !self.adj[v].is_empty())
-            .count()
+        (0..self.alive.len()).filter(|&v| self.alive[v] && !self.pinned[v] && !self.adj[v].is_empty()).count()
     }
 }
 
@@ -1244,10 +1191,7 @@ pub fn simplify(mesh: &TriMesh, locked: &[VertexId], opts: &SimplifyOptions) -> 
     if stop_rule {
         let free_remaining = st.free_remaining();
         if free_remaining > 0 {
-            return Err(SimplifyError::StopRuleUnreachable {
-                free_remaining,
-                contractions: st.contractions,
-            });
+            return Err(SimplifyError::StopRuleUnreachable { free_remaining, contractions: st.contractions });
         }
     }
 
@@ -1344,10 +1288,7 @@ pub const REMESH_MIN_QUALITY: f64 = 0.2;
 /// guards of [`simplify`] block further contractions (tiny closed meshes).
 pub fn remesh_unrelated(mesh: &TriMesh, target_faces: usize, opts: &SimplifyOptions) -> Result<TriMesh, SimplifyError> {
     if target_faces == 0 {
-        return Err(SimplifyError::InvalidOption {
-            option: "target_faces",
-            value: 0.0,
-        });
+        return Err(SimplifyError::InvalidOption { option: "target_faces", value: 0.0 });
     }
     validate_options(opts)?;
     analyse(mesh)?; // report problems with input ids, not split ids
@@ -1491,9 +1432,7 @@ mod tests {
     }
 
     fn worst_input_quality(m: &TriMesh) -> f64 {
-        (0..m.face_count())
-            .map(|f| quality(m.corners(FaceId(f as u32))))
-            .fold(1.0, f64::min)
+        (0..m.face_count()).map(|f| quality(m.corners(FaceId(f as u32)))).fold(1.0, f64::min)
     }
 
     fn edges_of(m: &TriMesh) -> Vec<(u32, u32)> {
@@ -1510,11 +1449,7 @@ mod tests {
     fn assert_locked_exact(input: &TriMesh, locked: &[VertexId], out: &Simplified) {
         assert_eq!(out.locked_output.len(), locked.len());
         for (l, o) in locked.iter().zip(&out.locked_output) {
-            assert_eq!(
-                out.mesh.position(*o).to_array(),
-                input.position(*l).to_array(),
-                "locked {l:?} moved"
-            );
+            assert_eq!(out.mesh.position(*o).to_array(), input.position(*l).to_array(), "locked {l:?} moved");
             assert_eq!(out.vertex_origin[o.idx()], *l);
         }
         assert_eq!(out.vertex_origin.len(), out.mesh.vertex_count());
@@ -1548,19 +1483,12 @@ mod tests {
         // edge (0,1) shared by three triangles
         let p = vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z, DVec3::NEG_Y];
         let m = TriMesh::from_raw(p.clone(), &[[0, 1, 2], [1, 0, 3], [0, 1, 4]]).unwrap();
-        let want = SimplifyError::NonManifoldEdge {
-            a: VertexId(0),
-            b: VertexId(1),
-            faces: 3,
-        };
+        let want = SimplifyError::NonManifoldEdge { a: VertexId(0), b: VertexId(1), faces: 3 };
         assert_eq!(check_oriented_manifold(&m).unwrap_err(), want);
         assert_eq!(simplify(&m, &[], &SimplifyOptions::default()).unwrap_err(), want);
         // edge (1,2) used twice in the direction 1 → 2
         let m = TriMesh::from_raw(p.clone(), &[[0, 1, 2], [3, 1, 2]]).unwrap();
-        let want = SimplifyError::InconsistentOrientation {
-            a: VertexId(1),
-            b: VertexId(2),
-        };
+        let want = SimplifyError::InconsistentOrientation { a: VertexId(1), b: VertexId(2) };
         assert_eq!(simplify(&m, &[], &SimplifyOptions::default()).unwrap_err(), want);
         assert_eq!(remesh_unrelated(&m, 10, &SimplifyOptions::default()).unwrap_err(), want);
         // bow tie: two triangles meeting at vertex 0 only
@@ -1568,10 +1496,7 @@ mod tests {
         let m = TriMesh::from_raw(p, &[[0, 1, 2], [0, 3, 4]]).unwrap();
         assert_eq!(
             check_oriented_manifold(&m).unwrap_err(),
-            SimplifyError::NonManifoldVertex {
-                vertex: VertexId(0),
-                fans: 2
-            }
+            SimplifyError::NonManifoldVertex { vertex: VertexId(0), fans: 2 }
         );
     }
 
@@ -1581,48 +1506,26 @@ mod tests {
         let o = SimplifyOptions::default();
         assert_eq!(
             simplify(&g, &[VertexId(1), VertexId(9)], &o).unwrap_err(),
-            SimplifyError::LockedOutOfRange {
-                vertex: VertexId(9),
-                count: 9
-            }
+            SimplifyError::LockedOutOfRange { vertex: VertexId(9), count: 9 }
         );
         assert_eq!(
             simplify(&g, &[VertexId(4), VertexId(1), VertexId(4)], &o).unwrap_err(),
             SimplifyError::DuplicateLocked { vertex: VertexId(4) }
         );
-        let bad = SimplifyOptions {
-            min_normal_cos: 2.0,
-            ..o
-        };
-        assert!(matches!(
-            simplify(&g, &[], &bad),
-            Err(SimplifyError::InvalidOption {
-                option: "min_normal_cos",
-                ..
-            })
-        ));
+        let bad = SimplifyOptions { min_normal_cos: 2.0, ..o };
+        assert!(matches!(simplify(&g, &[], &bad), Err(SimplifyError::InvalidOption { option: "min_normal_cos", .. })));
     }
 
     #[test]
     fn locked_vertices_survive_on_sphere() {
         let s = icosphere(4, 1.0); // 5120 faces
         let locked: Vec<VertexId> = (0..s.vertex_count() as u32).step_by(37).map(VertexId).collect();
-        let o = SimplifyOptions {
-            target_faces: Some(600),
-            ..SimplifyOptions::default()
-        };
+        let o = SimplifyOptions { target_faces: Some(600), ..SimplifyOptions::default() };
         let out = simplify(&s, &locked, &o).unwrap();
-        assert!(
-            out.mesh.face_count() <= 600 && out.mesh.face_count() >= 590,
-            "{}",
-            out.mesh.face_count()
-        );
+        assert!(out.mesh.face_count() <= 600 && out.mesh.face_count() >= 590, "{}", out.mesh.face_count());
         assert_locked_exact(&s, &locked, &out);
         let st = check_oriented_manifold(&out.mesh).unwrap();
-        assert_eq!(
-            (st.euler_characteristic, st.boundary_edges, st.isolated_vertices),
-            (2, 0, 0)
-        );
+        assert_eq!((st.euler_characteristic, st.boundary_edges, st.isolated_vertices), (2, 0, 0));
         assert_eq!(out.contractions, s.vertex_count() - out.mesh.vertex_count());
     }
 
@@ -1630,16 +1533,7 @@ mod tests {
     fn stop_rule_leaves_only_locked_edges() {
         let g = grid(9, 9);
         let id = |i: u32, j: u32| VertexId(j * 9 + i);
-        let locked = vec![
-            id(0, 0),
-            id(8, 0),
-            id(8, 8),
-            id(0, 8),
-            id(2, 2),
-            id(6, 3),
-            id(4, 6),
-            id(3, 4),
-        ];
+        let locked = vec![id(0, 0), id(8, 0), id(8, 8), id(0, 8), id(2, 2), id(6, 3), id(4, 6), id(3, 4)];
         let out = simplify(&g, &locked, &SimplifyOptions::default()).unwrap();
         assert_locked_exact(&g, &locked, &out);
         assert_eq!(out.mesh.vertex_count(), locked.len());
@@ -1669,14 +1563,8 @@ mod tests {
             })
             .map(VertexId)
             .collect();
-        let strict = SimplifyOptions {
-            flip_to_unblock: false,
-            ..SimplifyOptions::default()
-        };
-        assert!(matches!(
-            simplify(&g, &locked, &strict),
-            Err(SimplifyError::StopRuleUnreachable { .. })
-        ));
+        let strict = SimplifyOptions { flip_to_unblock: false, ..SimplifyOptions::default() };
+        assert!(matches!(simplify(&g, &locked, &strict), Err(SimplifyError::StopRuleUnreachable { .. })));
         let out = simplify(&g, &locked, &SimplifyOptions::default()).unwrap();
         assert!(out.flips > 0);
         assert_locked_exact(&g, &locked, &out);
@@ -1702,26 +1590,17 @@ mod tests {
         .unwrap();
         assert_eq!(
             simplify(&tet, &[VertexId(0)], &SimplifyOptions::default()).unwrap_err(),
-            SimplifyError::StopRuleUnreachable {
-                free_remaining: 3,
-                contractions: 0
-            }
+            SimplifyError::StopRuleUnreachable { free_remaining: 3, contractions: 0 }
         );
         // with a face target instead, the same input simply stays as it is
-        let o = SimplifyOptions {
-            target_faces: Some(1),
-            ..SimplifyOptions::default()
-        };
+        let o = SimplifyOptions { target_faces: Some(1), ..SimplifyOptions::default() };
         assert_eq!(simplify(&tet, &[VertexId(0)], &o).unwrap().mesh, tet);
     }
 
     #[test]
     fn planar_grid_stays_planar() {
         let g = grid(21, 16);
-        let o = SimplifyOptions {
-            target_faces: Some(40),
-            ..SimplifyOptions::default()
-        };
+        let o = SimplifyOptions { target_faces: Some(40), ..SimplifyOptions::default() };
         let out = simplify(&g, &[VertexId(170)], &o).unwrap();
         assert!(out.mesh.face_count() <= 40);
         assert!(out.mesh.positions().iter().all(|p| p.z == 0.0));
@@ -1739,22 +1618,14 @@ mod tests {
     fn boundary_modes() {
         let g = grid(10, 8);
         let on_boundary = |p: DVec3| p.x == 0.0 || p.y == 0.0 || p.x == 9.0 || p.y == 7.0;
-        let o = SimplifyOptions {
-            target_faces: Some(0),
-            boundary: BoundaryMode::Fixed,
-            ..SimplifyOptions::default()
-        };
+        let o = SimplifyOptions { target_faces: Some(0), boundary: BoundaryMode::Fixed, ..SimplifyOptions::default() };
         let out = simplify(&g, &[], &o).unwrap();
         let kept = out.mesh.positions().iter().filter(|p| on_boundary(**p)).count();
         assert_eq!(kept, 2 * (10 + 8) - 4, "every boundary vertex is kept");
         assert!(out.mesh.vertex_count() < g.vertex_count());
         let st = check_oriented_manifold(&out.mesh).unwrap();
         assert_eq!((st.boundary_loops, st.euler_characteristic), (1, 1));
-        let o = SimplifyOptions {
-            boundary: BoundaryMode::Free,
-            target_faces: Some(20),
-            ..o
-        };
+        let o = SimplifyOptions { boundary: BoundaryMode::Free, target_faces: Some(20), ..o };
         let out = simplify(&g, &[], &o).unwrap();
         let st = check_oriented_manifold(&out.mesh).unwrap();
         assert_eq!((st.boundary_loops, st.euler_characteristic), (1, 1));
@@ -1779,10 +1650,7 @@ mod tests {
     #[test]
     fn boundary_loops_never_merge() {
         let t = tube(12, 4);
-        let o = SimplifyOptions {
-            target_faces: Some(0),
-            ..SimplifyOptions::default()
-        };
+        let o = SimplifyOptions { target_faces: Some(0), ..SimplifyOptions::default() };
         let out = simplify(&t, &[], &o).unwrap();
         let st = check_oriented_manifold(&out.mesh).unwrap();
         assert_eq!((st.boundary_loops, st.euler_characteristic, st.components), (2, 0, 1));
@@ -1792,10 +1660,7 @@ mod tests {
     #[test]
     fn sphere_20k_to_2k_stays_round() {
         let s = icosphere(5, 2.0); // 20480 faces
-        let o = SimplifyOptions {
-            target_faces: Some(2000),
-            ..SimplifyOptions::default()
-        };
+        let o = SimplifyOptions { target_faces: Some(2000), ..SimplifyOptions::default() };
         let out = simplify(&s, &[], &o).unwrap();
         assert!((1990..=2000).contains(&out.mesh.face_count()));
         for p in out.mesh.positions() {
@@ -1814,20 +1679,11 @@ mod tests {
     #[test]
     fn max_error_stops_early() {
         let s = icosphere(3, 1.0);
-        let o = SimplifyOptions {
-            stop_when_only_locked_edges: false,
-            max_error: Some(1e-7),
-            ..SimplifyOptions::default()
-        };
+        let o =
+            SimplifyOptions { stop_when_only_locked_edges: false, max_error: Some(1e-7), ..SimplifyOptions::default() };
         let out = simplify(&s, &[], &o).unwrap();
-        assert!(
-            out.mesh.face_count() == s.face_count(),
-            "no contraction on a sphere is that cheap"
-        );
-        let o = SimplifyOptions {
-            max_error: Some(1e-3),
-            ..o
-        };
+        assert!(out.mesh.face_count() == s.face_count(), "no contraction on a sphere is that cheap");
+        let o = SimplifyOptions { max_error: Some(1e-3), ..o };
         let out = simplify(&s, &[], &o).unwrap();
         assert!(out.mesh.face_count() < s.face_count());
         assert!(out.contractions > 0);
@@ -1865,23 +1721,15 @@ mod tests {
         for p in r.positions() {
             assert!((p.length() - 1.0).abs() < 0.01, "{}", p.length());
         }
-        let worst = (0..r.face_count())
-            .map(|f| quality(r.corners(FaceId(f as u32))))
-            .fold(1.0, f64::min);
-        assert!(
-            worst >= REMESH_MIN_QUALITY.min(worst_input_quality(&s)) - 1e-9,
-            "{worst}"
-        );
+        let worst = (0..r.face_count()).map(|f| quality(r.corners(FaceId(f as u32)))).fold(1.0, f64::min);
+        assert!(worst >= REMESH_MIN_QUALITY.min(worst_input_quality(&s)) - 1e-9, "{worst}");
     }
 
     #[test]
     fn deterministic() {
         let s = icosphere(3, 1.0);
         let locked = [VertexId(3), VertexId(100), VertexId(400)];
-        let o = SimplifyOptions {
-            target_faces: Some(300),
-            ..SimplifyOptions::default()
-        };
+        let o = SimplifyOptions { target_faces: Some(300), ..SimplifyOptions::default() };
         assert_eq!(simplify(&s, &locked, &o).unwrap(), simplify(&s, &locked, &o).unwrap());
     }
 

@@ -88,9 +88,7 @@ pub fn slice(mesh: &TriMesh, plane: &Plane) -> Vec<Section> {
     let mut out = Vec::new();
     // Start open chains from edges with a single segment first, so that
     // they are walked end to end; then the remaining (closed) loops.
-    let mut starts: Vec<u32> = (0..edge_list.len() as u32)
-        .filter(|&e| incident[e as usize].len() == 1)
-        .collect();
+    let mut starts: Vec<u32> = (0..edge_list.len() as u32).filter(|&e| incident[e as usize].len() == 1).collect();
     starts.extend((0..edge_list.len() as u32).filter(|&e| incident[e as usize].len() != 1));
     for start in starts {
         let Some(&first_seg) = incident[start as usize].iter().find(|&&s| !used[s as usize]) else {
@@ -115,10 +113,7 @@ pub fn slice(mesh: &TriMesh, plane: &Plane) -> Vec<Section> {
         };
         let points: Vec<DVec3> = chain.iter().map(|&e| point_of(e)).collect();
         let edges = chain.iter().map(|&e| edge_list[e as usize]).collect();
-        out.push(Section {
-            polyline: Polyline::new(points, closed),
-            edges,
-        });
+        out.push(Section { polyline: Polyline::new(points, closed), edges });
     }
     out
 }
@@ -134,11 +129,7 @@ mod tests {
             let phi = std::f64::consts::PI * i as f64 / rings as f64;
             for j in 0..sectors {
                 let th = 2.0 * std::f64::consts::PI * j as f64 / sectors as f64;
-                pos.push(DVec3::new(
-                    r * phi.sin() * th.cos(),
-                    r * phi.cos(),
-                    r * phi.sin() * th.sin(),
-                ));
+                pos.push(DVec3::new(r * phi.sin() * th.cos(), r * phi.cos(), r * phi.sin() * th.sin()));
             }
         }
         pos.push(DVec3::new(0.0, -r, 0.0));
@@ -195,10 +186,7 @@ mod tests {
             DVec3::new(2.0, 1.0, 0.0),
         ];
         let m = TriMesh::from_raw(pos, &[[0, 1, 4], [0, 4, 3], [1, 2, 5], [1, 5, 4]]).unwrap();
-        let s = slice(
-            &m,
-            &Plane::from_point_normal(DVec3::new(0.5, 0.0, 0.0), DVec3::X).unwrap(),
-        );
+        let s = slice(&m, &Plane::from_point_normal(DVec3::new(0.5, 0.0, 0.0), DVec3::X).unwrap());
         assert_eq!(s.len(), 1);
         assert!(!s[0].polyline.closed);
         assert!((s[0].polyline.length() - 1.0).abs() < 1e-12);

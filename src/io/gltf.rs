@@ -125,11 +125,7 @@ pub struct GltfReadOptions {
 
 impl Default for GltfReadOptions {
     fn default() -> Self {
-        Self {
-            max_bytes: 64 * MIB,
-            max_vertices: 2_000_000,
-            max_triangles: 4_000_000,
-        }
+        Self { max_bytes: 64 * MIB, max_vertices: 2_000_000, max_triangles: 4_000_000 }
     }
 }
 
@@ -419,18 +415,11 @@ pub enum GltfError {
 /// world-space [`TriMesh`]. See the module documentation for the exact contract.
 pub fn read_mesh(bytes: &[u8], opts: &GltfReadOptions) -> Result<TriMesh, GltfError> {
     if bytes.len() > opts.max_bytes {
-        return Err(GltfError::InputTooLarge {
-            len: bytes.len(),
-            max: opts.max_bytes,
-        });
+        return Err(GltfError::InputTooLarge { len: bytes.len(), max: opts.max_bytes });
     }
     let (json, bin) = split_container(bytes)?;
     let root: gltf_json::Root = serde_json::from_slice(json)?;
-    let mut buffers = Buffers {
-        root: &root,
-        bin,
-        cache: vec![None; root.buffers.len()],
-    };
+    let mut buffers = Buffers { root: &root, bin, cache: vec![None; root.buffers.len()] };
     let instances = mesh_instances(&root)?;
 
     let mut positions: Vec<DVec3> = Vec::new();
@@ -441,39 +430,25 @@ pub fn read_mesh(bytes: &[u8], opts: &GltfReadOptions) -> Result<TriMesh, GltfEr
     // Per mesh, its triangle-based primitives and their modes, worked out on first use.
     let mut plans: Vec<Option<Vec<(usize, Mode)>>> = vec![None; root.meshes.len()];
     for (mesh_index, world) in instances {
-        let mesh = root.meshes.get(mesh_index).ok_or(GltfError::DanglingIndex {
-            kind: "mesh",
-            index: mesh_index,
-        })?;
+        let mesh = root.meshes.get(mesh_index).ok_or(GltfError::DanglingIndex { kind: "mesh", index: mesh_index })?;
         let plan = match plans.get_mut(mesh_index) {
             Some(Some(plan)) => plan,
             Some(slot) => slot.insert(triangle_primitives(mesh, mesh_index)?),
-            None => {
-                return Err(GltfError::DanglingIndex {
-                    kind: "mesh",
-                    index: mesh_index,
-                })
-            }
+            None => return Err(GltfError::DanglingIndex { kind: "mesh", index: mesh_index }),
         };
         let flip = world.determinant() < 0.0;
         // POSITION accessor -> (first vertex in `positions`, vertex count), per node instance.
         let mut shared: HashMap<usize, (u64, usize)> = HashMap::new();
         for &(primitive, mode) in plan.iter() {
-            let prim = mesh.primitives.get(primitive).ok_or(GltfError::DanglingIndex {
-                kind: "primitive",
-                index: primitive,
-            })?;
-            let site = Site {
-                mesh: mesh_index,
-                primitive,
-            };
+            let prim = mesh
+                .primitives
+                .get(primitive)
+                .ok_or(GltfError::DanglingIndex { kind: "primitive", index: primitive })?;
+            let site = Site { mesh: mesh_index, primitive };
             let pos_accessor = prim
                 .attributes
                 .get(&Checked::Valid(Semantic::Positions))
-                .ok_or(GltfError::MissingPosition {
-                    mesh: mesh_index,
-                    primitive,
-                })?
+                .ok_or(GltfError::MissingPosition { mesh: mesh_index, primitive })?
                 .value();
             let (base, vertex_count) = match shared.get(&pos_accessor) {
                 Some(&entry) => entry,
@@ -519,12 +494,7 @@ fn triangle_primitives(mesh: &gltf_json::Mesh, mesh_index: usize) -> Result<Vec<
         match prim.mode {
             Checked::Valid(Mode::Points | Mode::Lines | Mode::LineLoop | Mode::LineStrip) => {}
             Checked::Valid(mode) => out.push((primitive, mode)),
-            Checked::Invalid => {
-                return Err(GltfError::UnsupportedMode {
-                    mesh: mesh_index,
-                    primitive,
-                })
-            }
+            Checked::Invalid => return Err(GltfError::UnsupportedMode { mesh: mesh_index, primitive }),
         }
     }
     Ok(out)
@@ -549,30 +519,20 @@ fn split_container(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), GltfError> {
     if !bytes.starts_with(&GLB_MAGIC) {
         return Ok((bytes.strip_prefix(UTF8_BOM).unwrap_or(bytes), None));
     }
-    let truncated = |needed: usize| GltfError::GlbTruncated {
-        needed: needed as u64,
-        available: bytes.len(),
-    };
+    let truncated = |needed: usize| GltfError::GlbTruncated { needed: needed as u64, available: bytes.len() };
     let (Some(version), Some(length)) = (le_u32(bytes, WORD), le_u32(bytes, 2 * WORD)) else {
         return Err(truncated(GLB_HEADER_LEN));
     };
     if version != GLB_VERSION {
-        return Err(GltfError::MalformedGlb {
-            reason: format!("unsupported GLB version {version}"),
-        });
+        return Err(GltfError::MalformedGlb { reason: format!("unsupported GLB version {version}") });
     }
     let declared = length;
     let length = usize::try_from(declared).map_err(|_| truncated(usize::MAX))?;
     if length > bytes.len() {
-        return Err(GltfError::GlbTruncated {
-            needed: u64::from(declared),
-            available: bytes.len(),
-        });
+        return Err(GltfError::GlbTruncated { needed: u64::from(declared), available: bytes.len() });
     }
     if length < GLB_HEADER_LEN {
-        return Err(GltfError::MalformedGlb {
-            reason: format!("declared length {length} is shorter than the header"),
-        });
+        return Err(GltfError::MalformedGlb { reason: format!("declared length {length} is shorter than the header") });
     }
     let file = &bytes[..length];
     let mut json = None;
@@ -580,9 +540,7 @@ fn split_container(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), GltfError> {
     let mut at = GLB_HEADER_LEN;
     let mut chunk_index = 0usize;
     while at < file.len() {
-        let header_end = at
-            .checked_add(GLB_CHUNK_HEADER_LEN)
-            .ok_or_else(|| truncated(usize::MAX))?;
+        let header_end = at.checked_add(GLB_CHUNK_HEADER_LEN).ok_or_else(|| truncated(usize::MAX))?;
         let (Some(chunk_len), Some(chunk_type)) = (le_u32(file, at), le_u32(file, at + WORD)) else {
             return Err(truncated(header_end));
         };
@@ -591,16 +549,10 @@ fn split_container(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), GltfError> {
         let data = file.get(header_end..end).ok_or_else(|| truncated(end))?;
         match (chunk_index, chunk_type) {
             (0, CHUNK_JSON) => json = Some(data),
-            (0, _) => {
-                return Err(GltfError::MalformedGlb {
-                    reason: "the first chunk is not JSON".into(),
-                })
-            }
+            (0, _) => return Err(GltfError::MalformedGlb { reason: "the first chunk is not JSON".into() }),
             (1, CHUNK_BIN) => bin = Some(data),
             (_, CHUNK_JSON | CHUNK_BIN) => {
-                return Err(GltfError::MalformedGlb {
-                    reason: format!("unexpected chunk {chunk_index}"),
-                })
+                return Err(GltfError::MalformedGlb { reason: format!("unexpected chunk {chunk_index}") })
             }
             // Unknown chunk types must be ignored (glTF §4.4.3.1).
             _ => {}
@@ -608,14 +560,9 @@ fn split_container(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), GltfError> {
         chunk_index += 1;
         at = end;
     }
-    let json = json.ok_or_else(|| GltfError::MalformedGlb {
-        reason: "no JSON chunk".into(),
-    })?;
+    let json = json.ok_or_else(|| GltfError::MalformedGlb { reason: "no JSON chunk".into() })?;
     // Tolerate writers that pad the JSON chunk with NULs instead of spaces.
-    let trimmed = json
-        .iter()
-        .rposition(|&b| b != 0)
-        .map_or(&json[..0], |last| &json[..=last]);
+    let trimmed = json.iter().rposition(|&b| b != 0).map_or(&json[..0], |last| &json[..=last]);
     Ok((trimmed, bin))
 }
 
@@ -630,14 +577,8 @@ impl<'a> Buffers<'a> {
     /// The bytes of buffer `index`, truncated to its declared `byteLength`.
     fn get(&mut self, index: usize) -> Result<&[u8], GltfError> {
         let root = self.root;
-        let buffer = root
-            .buffers
-            .get(index)
-            .ok_or(GltfError::DanglingIndex { kind: "buffer", index })?;
-        let slot = self
-            .cache
-            .get_mut(index)
-            .ok_or(GltfError::DanglingIndex { kind: "buffer", index })?;
+        let buffer = root.buffers.get(index).ok_or(GltfError::DanglingIndex { kind: "buffer", index })?;
+        let slot = self.cache.get_mut(index).ok_or(GltfError::DanglingIndex { kind: "buffer", index })?;
         if slot.is_none() {
             let data: Cow<'a, [u8]> = match &buffer.uri {
                 None => match (index, self.bin) {
@@ -647,14 +588,11 @@ impl<'a> Buffers<'a> {
                 Some(uri) => Cow::Owned(decode_data_uri(index, uri)?),
             };
             let declared = buffer.byte_length.0;
-            let len = usize::try_from(declared)
-                .ok()
-                .filter(|&n| n <= data.len())
-                .ok_or(GltfError::BufferTooShort {
-                    buffer: index,
-                    declared,
-                    actual: data.len(),
-                })?;
+            let len = usize::try_from(declared).ok().filter(|&n| n <= data.len()).ok_or(GltfError::BufferTooShort {
+                buffer: index,
+                declared,
+                actual: data.len(),
+            })?;
             *slot = Some(match data {
                 Cow::Borrowed(b) => Cow::Borrowed(&b[..len]),
                 Cow::Owned(mut v) => {
@@ -669,30 +607,18 @@ impl<'a> Buffers<'a> {
 
 /// Decodes `data:[<media type>];base64,<data>`; anything else is refused.
 fn decode_data_uri(buffer: usize, uri: &str) -> Result<Vec<u8>, GltfError> {
-    let is_data = uri
-        .get(..DATA_URI_PREFIX.len())
-        .is_some_and(|s| s.eq_ignore_ascii_case(DATA_URI_PREFIX));
+    let is_data = uri.get(..DATA_URI_PREFIX.len()).is_some_and(|s| s.eq_ignore_ascii_case(DATA_URI_PREFIX));
     if !is_data {
-        return Err(GltfError::ExternalUri {
-            buffer,
-            uri: uri.to_owned(),
-        });
+        return Err(GltfError::ExternalUri { buffer, uri: uri.to_owned() });
     }
     let rest = &uri[DATA_URI_PREFIX.len()..];
-    let (header, payload) = rest.split_once(',').ok_or_else(|| GltfError::BadDataUri {
-        buffer,
-        reason: "no ',' before the payload".into(),
-    })?;
+    let (header, payload) = rest
+        .split_once(',')
+        .ok_or_else(|| GltfError::BadDataUri { buffer, reason: "no ',' before the payload".into() })?;
     if !header.ends_with(DATA_URI_BASE64) {
-        return Err(GltfError::BadDataUri {
-            buffer,
-            reason: "only base64 data URIs are supported".into(),
-        });
+        return Err(GltfError::BadDataUri { buffer, reason: "only base64 data URIs are supported".into() });
     }
-    DATA_URI_ENGINE.decode(payload).map_err(|e| GltfError::BadDataUri {
-        buffer,
-        reason: e.to_string(),
-    })
+    DATA_URI_ENGINE.decode(payload).map_err(|e| GltfError::BadDataUri { buffer, reason: e.to_string() })
 }
 
 /// The (mesh, world transform) pairs of the selected scene, in depth-first order.
@@ -702,35 +628,22 @@ fn mesh_instances(root: &gltf_json::Root) -> Result<Vec<(usize, DMat4)>, GltfErr
     for (i, node) in root.nodes.iter().enumerate() {
         for child in node.children.iter().flatten() {
             let c = child.value();
-            let slot = parent
-                .get_mut(c)
-                .ok_or(GltfError::DanglingIndex { kind: "node", index: c })?;
+            let slot = parent.get_mut(c).ok_or(GltfError::DanglingIndex { kind: "node", index: c })?;
             if c == i {
-                return Err(GltfError::NodeHierarchy {
-                    node: c,
-                    reason: "the node is its own child",
-                });
+                return Err(GltfError::NodeHierarchy { node: c, reason: "the node is its own child" });
             }
             if slot.is_some() {
-                return Err(GltfError::NodeHierarchy {
-                    node: c,
-                    reason: "the node has more than one parent",
-                });
+                return Err(GltfError::NodeHierarchy { node: c, reason: "the node has more than one parent" });
             }
             *slot = Some(i);
         }
     }
     let roots: Vec<usize> = if let Some(scene) = root.scene {
-        let s = root.scenes.get(scene.value()).ok_or(GltfError::DanglingIndex {
-            kind: "scene",
-            index: scene.value(),
-        })?;
+        let s =
+            root.scenes.get(scene.value()).ok_or(GltfError::DanglingIndex { kind: "scene", index: scene.value() })?;
         s.nodes.iter().map(|i| i.value()).collect()
     } else if !root.scenes.is_empty() {
-        root.scenes
-            .iter()
-            .flat_map(|s| s.nodes.iter().map(|i| i.value()))
-            .collect()
+        root.scenes.iter().flat_map(|s| s.nodes.iter().map(|i| i.value())).collect()
     } else if n > 0 {
         (0..n).filter(|&i| parent[i].is_none()).collect()
     } else {
@@ -742,12 +655,7 @@ fn mesh_instances(root: &gltf_json::Root) -> Result<Vec<(usize, DMat4)>, GltfErr
     for r in roots {
         match parent.get(r) {
             None => return Err(GltfError::DanglingIndex { kind: "node", index: r }),
-            Some(Some(_)) => {
-                return Err(GltfError::NodeHierarchy {
-                    node: r,
-                    reason: "a scene root has a parent",
-                })
-            }
+            Some(Some(_)) => return Err(GltfError::NodeHierarchy { node: r, reason: "a scene root has a parent" }),
             Some(None) => {}
         }
         if visited[r] {
@@ -756,18 +664,10 @@ fn mesh_instances(root: &gltf_json::Root) -> Result<Vec<(usize, DMat4)>, GltfErr
         // With at most one parent per node and a parentless root, this walk is a tree walk.
         let mut stack = vec![(r, DMat4::IDENTITY)];
         while let Some((i, parent_world)) = stack.pop() {
-            let node = root
-                .nodes
-                .get(i)
-                .ok_or(GltfError::DanglingIndex { kind: "node", index: i })?;
-            let seen = visited
-                .get_mut(i)
-                .ok_or(GltfError::DanglingIndex { kind: "node", index: i })?;
+            let node = root.nodes.get(i).ok_or(GltfError::DanglingIndex { kind: "node", index: i })?;
+            let seen = visited.get_mut(i).ok_or(GltfError::DanglingIndex { kind: "node", index: i })?;
             if *seen {
-                return Err(GltfError::NodeHierarchy {
-                    node: i,
-                    reason: "the node graph has a cycle",
-                });
+                return Err(GltfError::NodeHierarchy { node: i, reason: "the node graph has a cycle" });
             }
             *seen = true;
             let world = parent_world * local_transform(node, i)?;
@@ -832,17 +732,8 @@ fn accessor_elements<'b>(
 ) -> Result<Elements<'b>, GltfError> {
     let Site { mesh, primitive } = site;
     let root = buffers.root;
-    let acc = root.accessors.get(index).ok_or(GltfError::DanglingIndex {
-        kind: "accessor",
-        index,
-    })?;
-    let wrong = GltfError::WrongAccessorType {
-        mesh,
-        primitive,
-        accessor: index,
-        usage,
-        expected,
-    };
+    let acc = root.accessors.get(index).ok_or(GltfError::DanglingIndex { kind: "accessor", index })?;
+    let wrong = GltfError::WrongAccessorType { mesh, primitive, accessor: index, usage, expected };
     let (Checked::Valid(GenericComponentType(component)), Checked::Valid(ty)) = (acc.component_type, acc.type_) else {
         return Err(wrong);
     };
@@ -850,31 +741,15 @@ fn accessor_elements<'b>(
         return Err(wrong);
     }
     if acc.sparse.is_some() {
-        return Err(GltfError::SparseAccessor {
-            mesh,
-            primitive,
-            accessor: index,
-        });
+        return Err(GltfError::SparseAccessor { mesh, primitive, accessor: index });
     }
-    let view_index = acc
-        .buffer_view
-        .ok_or(GltfError::MissingBufferView {
-            mesh,
-            primitive,
-            accessor: index,
-        })?
-        .value();
-    let view = root.buffer_views.get(view_index).ok_or(GltfError::DanglingIndex {
-        kind: "bufferView",
-        index: view_index,
-    })?;
+    let view_index = acc.buffer_view.ok_or(GltfError::MissingBufferView { mesh, primitive, accessor: index })?.value();
+    let view =
+        root.buffer_views.get(view_index).ok_or(GltfError::DanglingIndex { kind: "bufferView", index: view_index })?;
     let buffer_index = view.buffer.value();
     let buffer = buffers.get(buffer_index)?;
 
-    let view_oob = || GltfError::BufferViewOutOfBounds {
-        view: view_index,
-        buffer: buffer_index,
-    };
+    let view_oob = || GltfError::BufferViewOutOfBounds { view: view_index, buffer: buffer_index };
     let view_start = usize::try_from(view.byte_offset.map_or(0, |o| o.0)).map_err(|_| view_oob())?;
     let view_len = usize::try_from(view.byte_length.0).map_err(|_| view_oob())?;
     let view_end = view_start.checked_add(view_len).ok_or_else(view_oob)?;
@@ -883,38 +758,19 @@ fn accessor_elements<'b>(
     let element = component.size() * ty.multiplicity();
     let stride = view.byte_stride.map_or(element, |s| s.0);
     if stride < element {
-        return Err(GltfError::BadStride {
-            mesh,
-            primitive,
-            accessor: index,
-            stride,
-            element,
-        });
+        return Err(GltfError::BadStride { mesh, primitive, accessor: index, stride, element });
     }
-    let oob = || GltfError::AccessorOutOfBounds {
-        mesh,
-        primitive,
-        accessor: index,
-    };
+    let oob = || GltfError::AccessorOutOfBounds { mesh, primitive, accessor: index };
     let offset = usize::try_from(acc.byte_offset.map_or(0, |o| o.0)).map_err(|_| oob())?;
     let count = usize::try_from(acc.count.0).map_err(|_| oob())?;
     let data = view_bytes.get(offset..).ok_or_else(oob)?;
     if let Some(last) = count.checked_sub(1) {
-        let needed = last
-            .checked_mul(stride)
-            .and_then(|b| b.checked_add(element))
-            .ok_or_else(oob)?;
+        let needed = last.checked_mul(stride).and_then(|b| b.checked_add(element)).ok_or_else(oob)?;
         if needed > data.len() {
             return Err(oob());
         }
     }
-    Ok(Elements {
-        data,
-        count,
-        stride,
-        element,
-        component,
-    })
+    Ok(Elements { data, count, stride, element, component })
 }
 
 /// Reads a `POSITION` accessor, transforms it to world space and appends it. Returns the count.
@@ -926,34 +782,17 @@ fn append_positions(
     opts: &GltfReadOptions,
     out: &mut Vec<DVec3>,
 ) -> Result<usize, GltfError> {
-    let elems = accessor_elements(
-        buffers,
-        site,
-        accessor,
-        "POSITION",
-        "a dense FLOAT VEC3 accessor",
-        |c, t| c == ComponentType::F32 && t == Type::Vec3,
-    )?;
+    let elems = accessor_elements(buffers, site, accessor, "POSITION", "a dense FLOAT VEC3 accessor", |c, t| {
+        c == ComponentType::F32 && t == Type::Vec3
+    })?;
     let total = out.len().checked_add(elems.count);
     if total.is_none_or(|t| t > opts.max_vertices) {
-        return Err(GltfError::TooManyVertices {
-            mesh: site.mesh,
-            primitive: site.primitive,
-            max: opts.max_vertices,
-        });
+        return Err(GltfError::TooManyVertices { mesh: site.mesh, primitive: site.primitive, max: opts.max_vertices });
     }
     out.reserve(elems.count);
-    let non_finite = |vertex| GltfError::NonFinitePosition {
-        mesh: site.mesh,
-        primitive: site.primitive,
-        accessor,
-        vertex,
-    };
-    let oob = || GltfError::AccessorOutOfBounds {
-        mesh: site.mesh,
-        primitive: site.primitive,
-        accessor,
-    };
+    let non_finite =
+        |vertex| GltfError::NonFinitePosition { mesh: site.mesh, primitive: site.primitive, accessor, vertex };
+    let oob = || GltfError::AccessorOutOfBounds { mesh: site.mesh, primitive: site.primitive, accessor };
     for i in 0..elems.count {
         let e = elems.get(i).ok_or_else(oob)?;
         let mut xyz = [0.0f64; 3];
@@ -971,11 +810,7 @@ fn append_positions(
 
 /// Number of triangles `count` corners make in `mode` (at least one), or an error if they cannot.
 fn triangle_count(site: Site, mode: Mode, count: usize) -> Result<usize, GltfError> {
-    let err = GltfError::IndexCount {
-        mesh: site.mesh,
-        primitive: site.primitive,
-        count,
-    };
+    let err = GltfError::IndexCount { mesh: site.mesh, primitive: site.primitive, count };
     match mode {
         Mode::Triangles if count >= 3 && count % 3 == 0 => Ok(count / 3),
         Mode::TriangleStrip | Mode::TriangleFan if count >= 3 => Ok(count - 2),
@@ -997,11 +832,7 @@ fn charge_triangles(
             *charged = total;
             Ok(())
         }
-        _ => Err(GltfError::TooManyTriangles {
-            mesh: site.mesh,
-            primitive: site.primitive,
-            max: opts.max_triangles,
-        }),
+        _ => Err(GltfError::TooManyTriangles { mesh: site.mesh, primitive: site.primitive, max: opts.max_triangles }),
     }
 }
 
@@ -1014,20 +845,12 @@ fn read_indices(
     opts: &GltfReadOptions,
     charged: &mut usize,
 ) -> Result<Vec<u64>, GltfError> {
-    let elems = accessor_elements(
-        buffers,
-        site,
-        accessor,
-        "indices",
-        "an UNSIGNED_BYTE/SHORT/INT SCALAR accessor",
-        |c, t| matches!(c, ComponentType::U8 | ComponentType::U16 | ComponentType::U32) && t == Type::Scalar,
-    )?;
+    let elems =
+        accessor_elements(buffers, site, accessor, "indices", "an UNSIGNED_BYTE/SHORT/INT SCALAR accessor", |c, t| {
+            matches!(c, ComponentType::U8 | ComponentType::U16 | ComponentType::U32) && t == Type::Scalar
+        })?;
     charge_triangles(site, mode, elems.count, opts, charged)?;
-    let oob = || GltfError::AccessorOutOfBounds {
-        mesh: site.mesh,
-        primitive: site.primitive,
-        accessor,
-    };
+    let oob = || GltfError::AccessorOutOfBounds { mesh: site.mesh, primitive: site.primitive, accessor };
     let mut out = Vec::with_capacity(elems.count);
     for i in 0..elems.count {
         let e = elems.get(i).ok_or_else(oob)?;
@@ -1049,11 +872,7 @@ fn assemble(mode: Mode, c: &[u64], site: Site, mut emit: impl FnMut([u64; 3])) -
         Mode::Triangles => c.chunks_exact(3).for_each(|t| emit([t[0], t[1], t[2]])),
         Mode::TriangleStrip => {
             for (i, w) in c.windows(3).enumerate().take(n) {
-                let t = if i % 2 == 0 {
-                    [w[0], w[1], w[2]]
-                } else {
-                    [w[0], w[2], w[1]]
-                };
+                let t = if i % 2 == 0 { [w[0], w[1], w[2]] } else { [w[0], w[2], w[1]] };
                 if !degenerate(&t) {
                     emit(t);
                 }
@@ -1095,10 +914,7 @@ pub fn write_glb(
         }
     }
     for (i, a) in attributes.iter().enumerate() {
-        let bad = |reason| GltfError::InvalidAttributeName {
-            name: a.name.to_owned(),
-            reason,
-        };
+        let bad = |reason| GltfError::InvalidAttributeName { name: a.name.to_owned(), reason };
         if !a.name.starts_with('_') {
             return Err(bad("application-specific attribute names must start with '_'"));
         }
@@ -1112,10 +928,7 @@ pub fn write_glb(
             return Err(mismatch(a.name, a.values.len()));
         }
         if let Some(element) = a.values.iter().position(|v| !v.is_finite()) {
-            return Err(GltfError::NonFiniteOutput {
-                attribute: a.name.to_owned(),
-                element,
-            });
+            return Err(GltfError::NonFiniteOutput { attribute: a.name.to_owned(), element });
         }
     }
 
@@ -1131,10 +944,7 @@ pub fn write_glb(
     for (i, p) in mesh.positions().iter().enumerate() {
         let q = p.as_vec3().to_array();
         if !q.iter().all(|c| c.is_finite()) {
-            return Err(GltfError::NonFiniteOutput {
-                attribute: "POSITION".into(),
-                element: i,
-            });
+            return Err(GltfError::NonFiniteOutput { attribute: "POSITION".into(), element: i });
         }
         for k in 0..3 {
             min[k] = min[k].min(q[k]);
@@ -1142,12 +952,7 @@ pub fn write_glb(
         }
         words.extend_from_slice(&q);
     }
-    let view = push_view(
-        &mut bin,
-        &mut views,
-        words.iter().map(|w| w.to_le_bytes()),
-        TARGET_ARRAY_BUFFER,
-    );
+    let view = push_view(&mut bin, &mut views, words.iter().map(|w| w.to_le_bytes()), TARGET_ARRAY_BUFFER);
     attr_map.insert("POSITION".into(), json!(accessors.len()));
     accessors.push(json!({
         "bufferView": view,
@@ -1168,24 +973,14 @@ pub fn write_glb(
             }
             words.extend_from_slice(&(*v / len).as_vec3().to_array());
         }
-        let view = push_view(
-            &mut bin,
-            &mut views,
-            words.iter().map(|w| w.to_le_bytes()),
-            TARGET_ARRAY_BUFFER,
-        );
+        let view = push_view(&mut bin, &mut views, words.iter().map(|w| w.to_le_bytes()), TARGET_ARRAY_BUFFER);
         attr_map.insert("NORMAL".into(), json!(accessors.len()));
         accessors.push(json!({ "bufferView": view, "componentType": COMPONENT_FLOAT, "count": n, "type": "VEC3" }));
     }
 
     // Custom scalar attributes
     for a in attributes {
-        let view = push_view(
-            &mut bin,
-            &mut views,
-            a.values.iter().map(|w| w.to_le_bytes()),
-            TARGET_ARRAY_BUFFER,
-        );
+        let view = push_view(&mut bin, &mut views, a.values.iter().map(|w| w.to_le_bytes()), TARGET_ARRAY_BUFFER);
         attr_map.insert(a.name.to_owned(), json!(accessors.len()));
         accessors.push(json!({ "bufferView": view, "componentType": COMPONENT_FLOAT, "count": n, "type": "SCALAR" }));
     }
@@ -1301,29 +1096,15 @@ mod tests {
     fn octahedron() -> TriMesh {
         let s = 0.1;
         let o = DVec3::new(0.3, -1.7, 2.2);
-        let p = [DVec3::X, -DVec3::X, DVec3::Y, -DVec3::Y, DVec3::Z, -DVec3::Z]
-            .map(|v| o + s * v)
-            .to_vec();
-        let t = [
-            [0, 2, 4],
-            [2, 1, 4],
-            [1, 3, 4],
-            [3, 0, 4],
-            [2, 0, 5],
-            [1, 2, 5],
-            [3, 1, 5],
-            [0, 3, 5],
-        ];
+        let p = [DVec3::X, -DVec3::X, DVec3::Y, -DVec3::Y, DVec3::Z, -DVec3::Z].map(|v| o + s * v).to_vec();
+        let t = [[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]];
         TriMesh::from_raw(p, &t).unwrap()
     }
 
     fn octahedron_glb() -> Vec<u8> {
         let m = octahedron();
         let ease: Vec<f32> = (0..m.vertex_count()).map(|i| i as f32 * 0.5).collect();
-        let attrs = [GlbAttribute {
-            name: "_EASE",
-            values: &ease,
-        }];
+        let attrs = [GlbAttribute { name: "_EASE", values: &ease }];
         write_glb(&m, Some(&m.vertex_normals()), &attrs, "grade3d test").unwrap()
     }
 
@@ -1345,11 +1126,7 @@ mod tests {
         assert_eq!(back.vertex_count(), m.vertex_count());
         assert_eq!(back.triangles(), m.triangles());
         for (a, b) in m.positions().iter().zip(back.positions()) {
-            assert_eq!(
-                *b,
-                a.as_vec3().as_dvec3(),
-                "positions are the f32 rounding of the input"
-            );
+            assert_eq!(*b, a.as_vec3().as_dvec3(), "positions are the f32 rounding of the input");
             assert!((*a - *b).abs().max_element() <= f64::from(f32::EPSILON) * a.abs().max_element());
         }
     }
@@ -1385,15 +1162,11 @@ mod tests {
         assert_eq!(ease["type"], "SCALAR");
         assert_eq!(ease["componentType"], COMPONENT_FLOAT);
         // Normals are unit length as f32.
-        let nview = &json["bufferViews"][json["accessors"][attrs["NORMAL"].as_u64().unwrap() as usize]["bufferView"]
-            .as_u64()
-            .unwrap() as usize];
+        let nview = &json["bufferViews"]
+            [json["accessors"][attrs["NORMAL"].as_u64().unwrap() as usize]["bufferView"].as_u64().unwrap() as usize];
         let start = bin_at + 8 + nview["byteOffset"].as_u64().unwrap() as usize;
         for v in glb[start..start + nview["byteLength"].as_u64().unwrap() as usize].chunks_exact(12) {
-            let c: Vec<f32> = v
-                .chunks_exact(4)
-                .map(|w| f32::from_le_bytes(w.try_into().unwrap()))
-                .collect();
+            let c: Vec<f32> = v.chunks_exact(4).map(|w| f32::from_le_bytes(w.try_into().unwrap())).collect();
             let len = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
             assert!((len - 1.0).abs() < 1e-6);
         }
@@ -1420,11 +1193,7 @@ mod tests {
                {"mesh":0,"translation":[1,2,3],"rotation":[0,0,0.70710677,0.70710677],"scale":[2,2,2]}]"#,
         );
         let m = read(&embed(&json, &tri_bin(TRI, [0, 1, 2]))).unwrap();
-        let want = [
-            DVec3::new(11.0, 2.0, 3.0),
-            DVec3::new(11.0, 4.0, 3.0),
-            DVec3::new(9.0, 2.0, 3.0),
-        ];
+        let want = [DVec3::new(11.0, 2.0, 3.0), DVec3::new(11.0, 4.0, 3.0), DVec3::new(9.0, 2.0, 3.0)];
         for (got, want) in m.positions().iter().zip(want) {
             assert!(got.distance(want) < 1e-6, "{got} vs {want}");
         }
@@ -1433,11 +1202,7 @@ mod tests {
 
     #[test]
     fn mirroring_transform_flips_winding() {
-        let m = read(&base_with(
-            r#""nodes":[{"mesh":0}]"#,
-            r#""nodes":[{"mesh":0,"scale":[-1,1,1]}]"#,
-        ))
-        .unwrap();
+        let m = read(&base_with(r#""nodes":[{"mesh":0}]"#, r#""nodes":[{"mesh":0,"scale":[-1,1,1]}]"#)).unwrap();
         assert_eq!(m.triangles()[0].map(|v| v.0), [0, 2, 1]);
         assert_eq!(m.positions()[1], -DVec3::X);
     }
@@ -1512,30 +1277,15 @@ mod tests {
 
     #[test]
     fn input_too_large() {
-        let opts = GltfReadOptions {
-            max_bytes: 10,
-            ..Default::default()
-        };
-        assert!(matches!(
-            read_mesh(&base_with("", ""), &opts),
-            Err(GltfError::InputTooLarge { max: 10, .. })
-        ));
+        let opts = GltfReadOptions { max_bytes: 10, ..Default::default() };
+        assert!(matches!(read_mesh(&base_with("", ""), &opts), Err(GltfError::InputTooLarge { max: 10, .. })));
     }
 
     #[test]
     fn truncated_glb() {
         let glb = octahedron_glb();
-        assert!(matches!(
-            read(&glb[..glb.len() - 10]),
-            Err(GltfError::GlbTruncated { .. })
-        ));
-        assert!(matches!(
-            read(&glb[..7]),
-            Err(GltfError::GlbTruncated {
-                needed: 12,
-                available: 7
-            })
-        ));
+        assert!(matches!(read(&glb[..glb.len() - 10]), Err(GltfError::GlbTruncated { .. })));
+        assert!(matches!(read(&glb[..7]), Err(GltfError::GlbTruncated { needed: 12, available: 7 })));
         // Header length honest, but the JSON chunk claims more than there is.
         let mut bad = glb.clone();
         bad[12..16].copy_from_slice(&u32::MAX.to_le_bytes());
@@ -1554,19 +1304,14 @@ mod tests {
 
     #[test]
     fn bad_json() {
-        assert!(matches!(
-            read(br#"{"asset": {"version": "2.0"}, "nodes": [ "#),
-            Err(GltfError::Json(_))
-        ));
+        assert!(matches!(read(br#"{"asset": {"version": "2.0"}, "nodes": [ "#), Err(GltfError::Json(_))));
         assert!(matches!(read(b"\x00\x01garbage"), Err(GltfError::Json(_))));
         assert!(matches!(read(&glb_from(b"{not json", &[])), Err(GltfError::Json(_))));
     }
 
     #[test]
     fn external_uri_is_refused() {
-        let json = BASE
-            .replace("data:application/octet-stream;base64,{B64}", "triangle.bin")
-            .replace("{LEN}", "44");
+        let json = BASE.replace("data:application/octet-stream;base64,{B64}", "triangle.bin").replace("{LEN}", "44");
         match read(json.as_bytes()) {
             Err(GltfError::ExternalUri { buffer: 0, uri }) => assert_eq!(uri, "triangle.bin"),
             other => panic!("{other:?}"),
@@ -1576,24 +1321,11 @@ mod tests {
     #[test]
     fn bad_data_uri_and_short_buffer() {
         let json = BASE.replace("{B64}", "!!!!").replace("{LEN}", "3");
-        assert!(matches!(
-            read(json.as_bytes()),
-            Err(GltfError::BadDataUri { buffer: 0, .. })
-        ));
+        assert!(matches!(read(json.as_bytes()), Err(GltfError::BadDataUri { buffer: 0, .. })));
         let json = BASE.replace(";base64,{B64}", ",plain").replace("{LEN}", "3");
-        assert!(matches!(
-            read(json.as_bytes()),
-            Err(GltfError::BadDataUri { buffer: 0, .. })
-        ));
+        assert!(matches!(read(json.as_bytes()), Err(GltfError::BadDataUri { buffer: 0, .. })));
         let short = embed(&BASE.replace("{LEN}", "100"), &tri_bin(TRI, [0, 1, 2]));
-        assert!(matches!(
-            read(&short),
-            Err(GltfError::BufferTooShort {
-                buffer: 0,
-                declared: 100,
-                actual: 44
-            })
-        ));
+        assert!(matches!(read(&short), Err(GltfError::BufferTooShort { buffer: 0, declared: 100, actual: 44 })));
         let no_uri = base_with(r#","uri":"data:application/octet-stream;base64,{B64}""#, "");
         assert!(matches!(read(&no_uri), Err(GltfError::MissingBufferData { buffer: 0 })));
     }
@@ -1601,48 +1333,24 @@ mod tests {
     #[test]
     fn accessor_out_of_bounds() {
         let e = read(&base_with(r#""count":3,"type":"VEC3""#, r#""count":4,"type":"VEC3""#));
-        assert!(matches!(
-            e,
-            Err(GltfError::AccessorOutOfBounds {
-                mesh: 0,
-                primitive: 0,
-                accessor: 0
-            })
-        ));
+        assert!(matches!(e, Err(GltfError::AccessorOutOfBounds { mesh: 0, primitive: 0, accessor: 0 })));
         // Hostile sizes that overflow naive offset arithmetic.
         let e = read(&base_with(
             r#""count":3,"type":"VEC3""#,
             r#""byteOffset":18446744073709551615,"count":3,"type":"VEC3""#,
         ));
         assert!(matches!(e, Err(GltfError::AccessorOutOfBounds { accessor: 0, .. })));
-        let e = read(&base_with(
-            r#""count":3,"type":"VEC3""#,
-            r#""count":4611686018427387904,"type":"VEC3""#,
-        ));
+        let e = read(&base_with(r#""count":3,"type":"VEC3""#, r#""count":4611686018427387904,"type":"VEC3""#));
         assert!(matches!(e, Err(GltfError::AccessorOutOfBounds { accessor: 0, .. })));
-        let e = read(&base_with(
-            r#""count":3,"type":"SCALAR""#,
-            r#""count":18446744073709551615,"type":"SCALAR""#,
-        ));
+        let e = read(&base_with(r#""count":3,"type":"SCALAR""#, r#""count":18446744073709551615,"type":"SCALAR""#));
         assert!(matches!(e, Err(GltfError::AccessorOutOfBounds { accessor: 1, .. })));
         let e = read(&base_with(
             r#""byteOffset":36,"byteLength":6"#,
             r#""byteOffset":18446744073709551615,"byteLength":6"#,
         ));
-        assert!(matches!(
-            e,
-            Err(GltfError::BufferViewOutOfBounds { view: 1, buffer: 0 })
-        ));
+        assert!(matches!(e, Err(GltfError::BufferViewOutOfBounds { view: 1, buffer: 0 })));
         let e = read(&base_with(r#""byteLength":36}"#, r#""byteLength":36,"byteStride":8}"#));
-        assert!(matches!(
-            e,
-            Err(GltfError::BadStride {
-                accessor: 0,
-                stride: 8,
-                element: 12,
-                ..
-            })
-        ));
+        assert!(matches!(e, Err(GltfError::BadStride { accessor: 0, stride: 8, element: 12, .. })));
     }
 
     #[test]
@@ -1665,23 +1373,9 @@ mod tests {
     #[test]
     fn wrong_component_type() {
         let e = read(&base_with(r#""componentType":5126"#, r#""componentType":5123"#));
-        assert!(matches!(
-            e,
-            Err(GltfError::WrongAccessorType {
-                accessor: 0,
-                usage: "POSITION",
-                ..
-            })
-        ));
+        assert!(matches!(e, Err(GltfError::WrongAccessorType { accessor: 0, usage: "POSITION", .. })));
         let e = read(&base_with(r#""componentType":5123"#, r#""componentType":5126"#));
-        assert!(matches!(
-            e,
-            Err(GltfError::WrongAccessorType {
-                accessor: 1,
-                usage: "indices",
-                ..
-            })
-        ));
+        assert!(matches!(e, Err(GltfError::WrongAccessorType { accessor: 1, usage: "indices", .. })));
         let e = read(&base_with(r#""type":"VEC3""#, r#""type":"VEC2""#));
         assert!(matches!(e, Err(GltfError::WrongAccessorType { accessor: 0, .. })));
         let e = read(&base_with(r#""componentType":5123"#, r#""componentType":9999"#));
@@ -1695,10 +1389,7 @@ mod tests {
             r#""count":3,"type":"VEC3","sparse":{"count":1,"indices":{"bufferView":1,"componentType":5123},"values":{"bufferView":0}}}"#,
         ));
         assert!(matches!(e, Err(GltfError::SparseAccessor { accessor: 0, .. })));
-        let e = read(&base_with(
-            r#""bufferView":0,"componentType":5126"#,
-            r#""componentType":5126"#,
-        ));
+        let e = read(&base_with(r#""bufferView":0,"componentType":5126"#, r#""componentType":5126"#));
         assert!(matches!(e, Err(GltfError::MissingBufferView { accessor: 0, .. })));
     }
 
@@ -1707,90 +1398,42 @@ mod tests {
         let e = read(&embed(BASE, &tri_bin(TRI, [0, 1, 5])));
         assert!(matches!(
             e,
-            Err(GltfError::IndexOutOfRange {
-                mesh: 0,
-                primitive: 0,
-                accessor: 1,
-                index: 5,
-                vertices: 3
-            })
+            Err(GltfError::IndexOutOfRange { mesh: 0, primitive: 0, accessor: 1, index: 5, vertices: 3 })
         ));
     }
 
     #[test]
     fn index_count_and_repeated_vertex() {
-        let e = read(&base_with(
-            r#""count":3,"type":"SCALAR""#,
-            r#""count":2,"type":"SCALAR""#,
-        ));
+        let e = read(&base_with(r#""count":3,"type":"SCALAR""#, r#""count":2,"type":"SCALAR""#));
         assert!(matches!(e, Err(GltfError::IndexCount { count: 2, .. })));
-        let e = read(&base_with(
-            r#""count":3,"type":"SCALAR""#,
-            r#""count":0,"type":"SCALAR""#,
-        ));
+        let e = read(&base_with(r#""count":3,"type":"SCALAR""#, r#""count":0,"type":"SCALAR""#));
         assert!(matches!(e, Err(GltfError::IndexCount { count: 0, .. })));
         let e = read(&embed(BASE, &tri_bin(TRI, [0, 1, 1])));
-        assert!(matches!(
-            e,
-            Err(GltfError::Mesh(MeshError::RepeatedVertex { face: 0, vertex: 1 }))
-        ));
+        assert!(matches!(e, Err(GltfError::Mesh(MeshError::RepeatedVertex { face: 0, vertex: 1 }))));
     }
 
     #[test]
     fn nan_coordinates() {
         let bin = tri_bin([[0.0, 0.0, 0.0], [f32::NAN, 0.0, 0.0], [0.0, 1.0, 0.0]], [0, 1, 2]);
         let e = read(&embed(BASE, &bin));
-        assert!(matches!(
-            e,
-            Err(GltfError::NonFinitePosition {
-                mesh: 0,
-                primitive: 0,
-                accessor: 0,
-                vertex: 1
-            })
-        ));
+        assert!(matches!(e, Err(GltfError::NonFinitePosition { mesh: 0, primitive: 0, accessor: 0, vertex: 1 })));
         let bin = tri_bin([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, f32::INFINITY, 0.0]], [0, 1, 2]);
-        assert!(matches!(
-            read(&embed(BASE, &bin)),
-            Err(GltfError::NonFinitePosition { vertex: 2, .. })
-        ));
+        assert!(matches!(read(&embed(BASE, &bin)), Err(GltfError::NonFinitePosition { vertex: 2, .. })));
     }
 
     #[test]
     fn no_triangles() {
-        assert!(matches!(
-            read(&base_with(r#""indices":1"#, r#""indices":1,"mode":0"#)),
-            Err(GltfError::NoTriangles)
-        ));
-        assert!(matches!(
-            read(&base_with(r#""nodes":[{"mesh":0}]"#, r#""nodes":[{}]"#)),
-            Err(GltfError::NoTriangles)
-        ));
-        assert!(matches!(
-            read(br#"{"asset":{"version":"2.0"}}"#),
-            Err(GltfError::NoTriangles)
-        ));
+        assert!(matches!(read(&base_with(r#""indices":1"#, r#""indices":1,"mode":0"#)), Err(GltfError::NoTriangles)));
+        assert!(matches!(read(&base_with(r#""nodes":[{"mesh":0}]"#, r#""nodes":[{}]"#)), Err(GltfError::NoTriangles)));
+        assert!(matches!(read(br#"{"asset":{"version":"2.0"}}"#), Err(GltfError::NoTriangles)));
     }
 
     #[test]
     fn limits() {
-        let opts = GltfReadOptions {
-            max_vertices: 2,
-            ..Default::default()
-        };
+        let opts = GltfReadOptions { max_vertices: 2, ..Default::default() };
         let e = read_mesh(&base_with("", ""), &opts);
-        assert!(matches!(
-            e,
-            Err(GltfError::TooManyVertices {
-                mesh: 0,
-                primitive: 0,
-                max: 2
-            })
-        ));
-        let opts = GltfReadOptions {
-            max_triangles: 0,
-            ..Default::default()
-        };
+        assert!(matches!(e, Err(GltfError::TooManyVertices { mesh: 0, primitive: 0, max: 2 })));
+        let opts = GltfReadOptions { max_triangles: 0, ..Default::default() };
         let e = read_mesh(&base_with("", ""), &opts);
         assert!(matches!(e, Err(GltfError::TooManyTriangles { max: 0, .. })));
     }
@@ -1804,53 +1447,28 @@ mod tests {
         let e = read(&base_with(r#""nodes":[{"mesh":0}]"#, r#""nodes":[{"mesh":7}]"#));
         assert!(matches!(e, Err(GltfError::DanglingIndex { kind: "mesh", index: 7 })));
         let e = read(&base_with(r#""POSITION":0"#, r#""POSITION":9"#));
-        assert!(matches!(
-            e,
-            Err(GltfError::DanglingIndex {
-                kind: "accessor",
-                index: 9
-            })
-        ));
-        let e = read(&base_with(
-            r#""nodes":[{"mesh":0}]"#,
-            r#""nodes":[{"mesh":0,"children":[1]},{"children":[1]}]"#,
-        ));
+        assert!(matches!(e, Err(GltfError::DanglingIndex { kind: "accessor", index: 9 })));
+        let e = read(&base_with(r#""nodes":[{"mesh":0}]"#, r#""nodes":[{"mesh":0,"children":[1]},{"children":[1]}]"#));
         assert!(matches!(e, Err(GltfError::NodeHierarchy { node: 1, .. })));
-        let e = read(&base_with(
-            r#""nodes":[{"mesh":0}]"#,
-            r#""nodes":[{"mesh":0,"children":[0]}]"#,
-        ));
+        let e = read(&base_with(r#""nodes":[{"mesh":0}]"#, r#""nodes":[{"mesh":0,"children":[0]}]"#));
         assert!(matches!(e, Err(GltfError::NodeHierarchy { node: 0, .. })));
         let cyc = r#""scenes":[{"nodes":[0]}],"nodes":[{"mesh":0,"children":[1]},{"children":[0]}]"#;
         let e = read(&base_with(r#""scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}]"#, cyc));
         assert!(matches!(e, Err(GltfError::NodeHierarchy { node: 0, .. })));
-        let e = read(&base_with(
-            r#""nodes":[{"mesh":0}]"#,
-            r#""nodes":[{"mesh":0,"rotation":[0,0,0,0]}]"#,
-        ));
+        let e = read(&base_with(r#""nodes":[{"mesh":0}]"#, r#""nodes":[{"mesh":0,"rotation":[0,0,0,0]}]"#));
         assert!(matches!(e, Err(GltfError::NonFiniteTransform { node: 0 })));
-        let e = read(&base_with(
-            r#""nodes":[{"mesh":0}]"#,
-            r#""nodes":[{"mesh":0,"scale":[1e39,1,1]}]"#,
-        ));
+        let e = read(&base_with(r#""nodes":[{"mesh":0}]"#, r#""nodes":[{"mesh":0,"scale":[1e39,1,1]}]"#));
         assert!(matches!(e, Err(GltfError::NonFiniteTransform { node: 0 })));
     }
 
     #[test]
     fn scene_selection_without_default_scene() {
         // No "scene": both scenes are read, node 0 (in both) only once.
-        let m = read(&base_with(
-            r#""scene":0,"scenes":[{"nodes":[0]}]"#,
-            r#""scenes":[{"nodes":[0]},{"nodes":[0]}]"#,
-        ))
-        .unwrap();
+        let m = read(&base_with(r#""scene":0,"scenes":[{"nodes":[0]}]"#, r#""scenes":[{"nodes":[0]},{"nodes":[0]}]"#))
+            .unwrap();
         assert_eq!(m.face_count(), 1);
         // No scenes, no nodes: every mesh.
-        let m = read(&base_with(
-            r#""scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],"#,
-            "",
-        ))
-        .unwrap();
+        let m = read(&base_with(r#""scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],"#, "")).unwrap();
         assert_eq!(m.face_count(), 1);
     }
 
@@ -1861,66 +1479,22 @@ mod tests {
         let m = octahedron();
         let n = m.vertex_normals();
         let e = write_glb(&m, Some(&n[..5]), &[], "t");
-        assert!(matches!(
-            e,
-            Err(GltfError::LengthMismatch {
-                expected: 6,
-                found: 5,
-                ..
-            })
-        ));
+        assert!(matches!(e, Err(GltfError::LengthMismatch { expected: 6, found: 5, .. })));
         let v = [0.0f32; 6];
-        let e = write_glb(
-            &m,
-            None,
-            &[GlbAttribute {
-                name: "_EASE",
-                values: &v[..3],
-            }],
-            "t",
-        );
-        assert!(matches!(
-            e,
-            Err(GltfError::LengthMismatch {
-                expected: 6,
-                found: 3,
-                ..
-            })
-        ));
-        let e = write_glb(
-            &m,
-            None,
-            &[GlbAttribute {
-                name: "EASE",
-                values: &v,
-            }],
-            "t",
-        );
+        let e = write_glb(&m, None, &[GlbAttribute { name: "_EASE", values: &v[..3] }], "t");
+        assert!(matches!(e, Err(GltfError::LengthMismatch { expected: 6, found: 3, .. })));
+        let e = write_glb(&m, None, &[GlbAttribute { name: "EASE", values: &v }], "t");
         assert!(matches!(e, Err(GltfError::InvalidAttributeName { .. })));
         let e = write_glb(&m, None, &[GlbAttribute { name: "_", values: &v }], "t");
         assert!(matches!(e, Err(GltfError::InvalidAttributeName { .. })));
         let a = GlbAttribute { name: "_A", values: &v };
-        assert!(matches!(
-            write_glb(&m, None, &[a, a], "t"),
-            Err(GltfError::InvalidAttributeName { .. })
-        ));
+        assert!(matches!(write_glb(&m, None, &[a, a], "t"), Err(GltfError::InvalidAttributeName { .. })));
         let nan = [0.0, 0.0, f32::NAN, 0.0, 0.0, 0.0];
-        let e = write_glb(
-            &m,
-            None,
-            &[GlbAttribute {
-                name: "_A",
-                values: &nan,
-            }],
-            "t",
-        );
+        let e = write_glb(&m, None, &[GlbAttribute { name: "_A", values: &nan }], "t");
         assert!(matches!(e, Err(GltfError::NonFiniteOutput { element: 2, .. })));
         let mut zero = n.clone();
         zero[4] = DVec3::ZERO;
-        assert!(matches!(
-            write_glb(&m, Some(&zero), &[], "t"),
-            Err(GltfError::BadNormal { vertex: 4 })
-        ));
+        assert!(matches!(write_glb(&m, Some(&zero), &[], "t"), Err(GltfError::BadNormal { vertex: 4 })));
         let huge = m.map_positions(|p| p * 1e300).unwrap();
         let e = write_glb(&huge, None, &[], "t");
         assert!(matches!(e, Err(GltfError::NonFiniteOutput { ref attribute, .. }) if attribute == "POSITION"));

@@ -76,10 +76,7 @@ pub enum DataError {
 }
 
 fn malformed(what: &str, detail: impl Into<String>) -> DataError {
-    DataError::Malformed {
-        what: what.to_owned(),
-        detail: detail.into(),
-    }
+    DataError::Malformed { what: what.to_owned(), detail: detail.into() }
 }
 
 struct Reader<'a> {
@@ -89,11 +86,8 @@ struct Reader<'a> {
 
 impl Reader<'_> {
     fn take(&mut self, n: usize) -> Result<&[u8], DataError> {
-        let end = self
-            .at
-            .checked_add(n)
-            .filter(|&e| e <= self.b.len())
-            .ok_or_else(|| malformed("hm08.bin", "truncated"))?;
+        let end =
+            self.at.checked_add(n).filter(|&e| e <= self.b.len()).ok_or_else(|| malformed("hm08.bin", "truncated"))?;
         let s = &self.b[self.at..end];
         self.at = end;
         Ok(s)
@@ -118,19 +112,14 @@ impl Reader<'_> {
 /// Decodes the gzip-compressed binary.
 pub fn decode(gz: &[u8]) -> Result<Hm08Data, DataError> {
     let mut raw = Vec::new();
-    flate2::read::GzDecoder::new(gz)
-        .read_to_end(&mut raw)
-        .map_err(|e| malformed("hm08.bin.gz", e.to_string()))?;
+    flate2::read::GzDecoder::new(gz).read_to_end(&mut raw).map_err(|e| malformed("hm08.bin.gz", e.to_string()))?;
     let mut r = Reader { b: &raw, at: 0 };
     if r.take(8)? != MAGIC {
         return Err(malformed("hm08.bin", "bad magic"));
     }
     let version = r.u32()?;
     if version != FORMAT_VERSION {
-        return Err(malformed(
-            "hm08.bin",
-            format!("version {version}, expected {FORMAT_VERSION}"),
-        ));
+        return Err(malformed("hm08.bin", format!("version {version}, expected {FORMAT_VERSION}")));
     }
     let nv = r.u32()? as usize;
     let mut positions = Vec::with_capacity(nv.min(1 << 20));
@@ -179,26 +168,12 @@ pub fn decode(gz: &[u8]) -> Result<Hm08Data, DataError> {
         for col in &mut cols {
             let lo = r.take(n)?.to_vec();
             let hi = r.take(n)?;
-            *col = lo
-                .iter()
-                .zip(hi)
-                .map(|(&l, &h)| i16::from_le_bytes([l, h]))
-                .collect::<Vec<i16>>();
+            *col = lo.iter().zip(hi).map(|(&l, &h)| i16::from_le_bytes([l, h])).collect::<Vec<i16>>();
         }
-        let d = ids
-            .iter()
-            .enumerate()
-            .map(|(i, &v)| (v, [cols[0][i], cols[1][i], cols[2][i]]))
-            .collect();
+        let d = ids.iter().enumerate().map(|(i, &v)| (v, [cols[0][i], cols[1][i], cols[2][i]])).collect();
         targets.insert(name, d);
     }
-    Ok(Hm08Data {
-        positions,
-        triangles,
-        mirror,
-        rings,
-        targets,
-    })
+    Ok(Hm08Data { positions, triangles, mirror, rings, targets })
 }
 
 /// Encodes to the gzip-compressed binary.
@@ -270,19 +245,13 @@ const SHIPPED: &[(&str, &str)] = &[
 ];
 
 fn read_text(path: &Path) -> Result<String, DataError> {
-    std::fs::read_to_string(path).map_err(|source| DataError::Io {
-        path: path.display().to_string(),
-        source,
-    })
+    std::fs::read_to_string(path).map_err(|source| DataError::Io { path: path.display().to_string(), source })
 }
 
 fn fixed(x: f64, unit: f64, what: &str) -> Result<f64, DataError> {
     let q = x / unit;
     if (q - q.round()).abs() > 1e-3 {
-        return Err(malformed(
-            what,
-            format!("{x} is not a multiple of {unit}: the encoding would lose precision"),
-        ));
+        return Err(malformed(what, format!("{x} is not a multiple of {unit}: the encoding would lose precision")));
     }
     Ok(q.round())
 }
@@ -346,13 +315,8 @@ pub fn from_makehuman(dir: &Path) -> Result<Hm08Data, DataError> {
     let mut rings = BTreeMap::new();
     if let Some(m) = measures.get("measures").and_then(|m| m.as_object()) {
         for (k, v) in m {
-            let ids: Vec<u16> = v
-                .as_array()
-                .into_iter()
-                .flatten()
-                .filter_map(|x| x.as_u64())
-                .map(|x| x as u16)
-                .collect();
+            let ids: Vec<u16> =
+                v.as_array().into_iter().flatten().filter_map(|x| x.as_u64()).map(|x| x as u16).collect();
             rings.insert(k.clone(), ids);
         }
     }
@@ -360,20 +324,15 @@ pub fn from_makehuman(dir: &Path) -> Result<Hm08Data, DataError> {
     for (folder, prefix) in SHIPPED {
         let path = dir.join("targets").join(folder);
         let mut entries: Vec<_> = std::fs::read_dir(&path)
-            .map_err(|source| DataError::Io {
-                path: path.display().to_string(),
-                source,
-            })?
+            .map_err(|source| DataError::Io { path: path.display().to_string(), source })?
             .filter_map(|e| e.ok())
             .map(|e| e.file_name().to_string_lossy().into_owned())
             .filter(|n| n.ends_with(".target.gz") && n.starts_with(prefix))
             .collect();
         entries.sort();
         for file in entries {
-            let bytes = std::fs::read(path.join(&file)).map_err(|source| DataError::Io {
-                path: path.join(&file).display().to_string(),
-                source,
-            })?;
+            let bytes = std::fs::read(path.join(&file))
+                .map_err(|source| DataError::Io { path: path.join(&file).display().to_string(), source })?;
             let mut text = String::new();
             flate2::read::GzDecoder::new(&bytes[..])
                 .read_to_string(&mut text)
@@ -384,17 +343,13 @@ pub fn from_makehuman(dir: &Path) -> Result<Hm08Data, DataError> {
                 if f.len() < 4 {
                     return Err(malformed(&file, format!("bad line `{line}`")));
                 }
-                let v: usize = f[0]
-                    .parse()
-                    .map_err(|_| malformed(&file, format!("bad index in `{line}`")))?;
+                let v: usize = f[0].parse().map_err(|_| malformed(&file, format!("bad index in `{line}`")))?;
                 if v >= SKIN_VERTICES {
                     continue;
                 }
                 let mut d = [0i16; 3];
                 for k in 0..3 {
-                    let x: f64 = f[k + 1]
-                        .parse()
-                        .map_err(|_| malformed(&file, format!("bad delta in `{line}`")))?;
+                    let x: f64 = f[k + 1].parse().map_err(|_| malformed(&file, format!("bad delta in `{line}`")))?;
                     let q = fixed(x, DELTA_UNIT_DM, &file)?;
                     if q.abs() > f64::from(i16::MAX) {
                         return Err(malformed(&file, format!("delta {x} out of range")));
@@ -409,11 +364,5 @@ pub fn from_makehuman(dir: &Path) -> Result<Hm08Data, DataError> {
             targets.insert(name, deltas);
         }
     }
-    Ok(Hm08Data {
-        positions,
-        triangles,
-        mirror,
-        rings,
-        targets,
-    })
+    Ok(Hm08Data { positions, triangles, mirror, rings, targets })
 }

@@ -293,10 +293,7 @@ pub fn fit_size(model: &BodyModel, row: &SizeRow, opts: &FitOptions) -> Result<F
             || id.girth_curve().is_some()
             || modifier_for(id).is_some();
         if !ok {
-            return Err(FitError::Unsupported {
-                size: row.size.clone(),
-                measurement: id,
-            });
+            return Err(FitError::Unsupported { size: row.size.clone(), measurement: id });
         }
     }
     // variables
@@ -306,11 +303,7 @@ pub fn fit_size(model: &BodyModel, row: &SizeRow, opts: &FitOptions) -> Result<F
     }
     let mods: BTreeSet<&'static str> = ids.iter().filter_map(|&id| modifier_for(id)).collect();
     let available = model.modifier_names();
-    vars.extend(
-        mods.into_iter()
-            .filter(|m| available.iter().any(|a| a == m))
-            .map(Var::Modifier),
-    );
+    vars.extend(mods.into_iter().filter(|m| available.iter().any(|a| a == m)).map(Var::Modifier));
     let x0: Vec<f64> = vars
         .iter()
         .map(|v| match v {
@@ -343,11 +336,7 @@ pub fn fit_size(model: &BodyModel, row: &SizeRow, opts: &FitOptions) -> Result<F
         let mut jac = vec![vec![0.0; k]; r.len()];
         for j in 0..k {
             let (lo, hi) = bounds(vars[j]);
-            let h = if x[j] + opts.fd_step <= hi {
-                opts.fd_step
-            } else {
-                -opts.fd_step
-            };
+            let h = if x[j] + opts.fd_step <= hi { opts.fd_step } else { -opts.fd_step };
             let mut xp = x.clone();
             xp[j] = (x[j] + h).clamp(lo, hi);
             let rp = eval(&xp)?;
@@ -404,10 +393,8 @@ pub fn fit_size(model: &BodyModel, row: &SizeRow, opts: &FitOptions) -> Result<F
     let mut measured = measure(&body, &opts.measure);
     let mut rounds = 0;
     // profile geometry from the phase-1 body (centres and heights stay fixed)
-    let profiles: Vec<(MeasurementId, f64, DVec3)> = profiled
-        .iter()
-        .filter_map(|&id| profile_frame(&body, id, opts).map(|(y, o)| (id, y, o)))
-        .collect();
+    let profiles: Vec<(MeasurementId, f64, DVec3)> =
+        profiled.iter().filter_map(|&id| profile_frame(&body, id, opts).map(|(y, o)| (id, y, o))).collect();
     while rounds < opts.scaling_iterations {
         let worst = profiled
             .iter()
@@ -431,13 +418,7 @@ pub fn fit_size(model: &BodyModel, row: &SizeRow, opts: &FitOptions) -> Result<F
     let residuals = ids
         .iter()
         .map(|&id| {
-            (
-                id,
-                Residual {
-                    target_m: row.targets[&id],
-                    achieved_m: measured.get(&id).copied().unwrap_or(f64::NAN),
-                },
-            )
+            (id, Residual { target_m: row.targets[&id], achieved_m: measured.get(&id).copied().unwrap_or(f64::NAN) })
         })
         .collect();
     Ok(FittedMannequin {
@@ -480,10 +461,7 @@ fn profile_frame(body: &FeatureBody, id: MeasurementId, opts: &FitOptions) -> Op
             let ys = 0.5 * (sl.y + sr.y);
             let ya = 0.5 * (al.y + ar.y);
             let y = ys + opts.measure.shoulder_girth_level * (ya - ys);
-            let plane = Plane {
-                normal: DVec3::Y,
-                offset: y,
-            };
+            let plane = Plane { normal: DVec3::Y, offset: y };
             let loops = slice(&body.mesh, &plane);
             let o = bbox_centre(&mut loops.iter().flat_map(|s| s.polyline.points.iter().copied()))?;
             Some((y, o))
@@ -500,10 +478,8 @@ fn scale_profiles(
     lm: &Landmarks,
     opts: &FitOptions,
 ) -> Vec<DVec3> {
-    let mut prof: Vec<(f64, DVec3, f64)> = profiles
-        .iter()
-        .map(|(id, y, o)| (*y, *o, scales.get(id).copied().unwrap_or(1.0)))
-        .collect();
+    let mut prof: Vec<(f64, DVec3, f64)> =
+        profiles.iter().map(|(id, y, o)| (*y, *o, scales.get(id).copied().unwrap_or(1.0))).collect();
     prof.sort_by(|a, b| a.0.total_cmp(&b.0));
     let falloff = opts.blend_falloff_mm / MM_PER_M;
     let transform = |p: DVec3| -> DVec3 {
@@ -529,19 +505,11 @@ fn blend(prof: &[(f64, DVec3, f64)], y: f64, falloff: f64) -> (f64, DVec3) {
     };
     let last = prof[prof.len() - 1];
     if y <= first.0 {
-        let w = if falloff > 0.0 {
-            (1.0 - (first.0 - y) / falloff).max(0.0)
-        } else {
-            0.0
-        };
+        let w = if falloff > 0.0 { (1.0 - (first.0 - y) / falloff).max(0.0) } else { 0.0 };
         return (1.0 + w * (first.2 - 1.0), first.1);
     }
     if y >= last.0 {
-        let w = if falloff > 0.0 {
-            (1.0 - (y - last.0) / falloff).max(0.0)
-        } else {
-            0.0
-        };
+        let w = if falloff > 0.0 { (1.0 - (y - last.0) / falloff).max(0.0) } else { 0.0 };
         return (1.0 + w * (last.2 - 1.0), last.1);
     }
     for pair in prof.windows(2) {
@@ -577,10 +545,9 @@ fn arm_vertices(mesh: &TriMesh, lm: &Landmarks, opts: &FitOptions) -> Vec<ArmSid
     }
     let crotch_y = lm.points.get(&PointId::Crotch).map_or(f64::NEG_INFINITY, |p| p.y);
     let mut out = Vec::new();
-    for (shoulder, underarm, sign) in [
-        (PointId::ShoulderLeft, PointId::UnderarmLeft, 1.0),
-        (PointId::ShoulderRight, PointId::UnderarmRight, -1.0),
-    ] {
+    for (shoulder, underarm, sign) in
+        [(PointId::ShoulderLeft, PointId::UnderarmLeft, 1.0), (PointId::ShoulderRight, PointId::UnderarmRight, -1.0)]
+    {
         let (Some(&s), Some(&u)) = (lm.points.get(&shoulder), lm.points.get(&underarm)) else {
             continue;
         };
@@ -616,10 +583,7 @@ fn arm_vertices(mesh: &TriMesh, lm: &Landmarks, opts: &FitOptions) -> Vec<ArmSid
             }
         }
         if !leaked {
-            out.push(ArmSide {
-                shoulder,
-                vertices: verts,
-            });
+            out.push(ArmSide { shoulder, vertices: verts });
         }
     }
     out

@@ -9,7 +9,9 @@
 //!   [`Hm08LandmarkOptions::neck_base_tilt_deg`], meets the sagittal plane
 //!   at the front neck point and the cervicale;
 //! * girth points: where a ring crosses the sagittal plane x = 0 (front:
-//!   larger z, back: smaller z) and the coronal plane through its centroid
+//!   larger z, back: smaller z; moved to the closest point of the sagittal
+//!   section, so that they lie on the surface at x = 0 even across the
+//!   gluteal cleft) and the coronal plane through its centroid
 //!   (left: larger x — the body's left is +X — right: smaller x);
 //! * limb points: the outer crossing of the thigh, knee and ankle rings
 //!   with the coronal plane through their centroids (the rings are on the
@@ -46,9 +48,7 @@ pub struct Hm08LandmarkOptions {
 
 impl Default for Hm08LandmarkOptions {
     fn default() -> Self {
-        Self {
-            neck_base_tilt_deg: 25.0,
-        }
+        Self { neck_base_tilt_deg: 25.0 }
     }
 }
 
@@ -101,78 +101,41 @@ pub fn hm08_landmarks(
 ) -> Result<Landmarks, LandmarkError> {
     let data = model.data();
     let ring_ids = |name: &str| -> Vec<VertexId> {
-        data.rings
-            .get(name)
-            .map(|r| r.iter().map(|&v| VertexId(u32::from(v))).collect())
-            .unwrap_or_default()
+        data.rings.get(name).map(|r| r.iter().map(|&v| VertexId(u32::from(v))).collect()).unwrap_or_default()
     };
-    let err = |point: PointId, reason: &str| LandmarkError {
-        point,
-        reason: reason.to_owned(),
-    };
+    let err = |point: PointId, reason: &str| LandmarkError { point, reason: reason.to_owned() };
     let mut lm = Landmarks::default();
-    let sagittal = Plane {
-        normal: DVec3::X,
-        offset: 0.0,
-    };
+    let sagittal = Plane { normal: DVec3::X, offset: 0.0 };
 
+    // Front and back points are moved onto the sagittal section itself: a
+    // ring's chord bridges the gluteal cleft, and the closest surface point
+    // to a point in the air above a crease is on one side or the other.
+    // Only the body's outline (the longest loop) counts: where the buttocks
+    // press together the mesh can cross x = 0 in small extra loops.
+    let midline = slice(mesh, &sagittal)
+        .into_iter()
+        .map(|s| s.polyline)
+        .max_by(|a, b| a.length().total_cmp(&b.length()))
+        .ok_or_else(|| err(PointId::Crotch, "no sagittal section"))?;
+    let on_midline = |p: DVec3| midline.closest(p).map_or(p, |c| c.point);
     let girths = [
-        (
-            "bust-circ",
-            [
-                PointId::BustFront,
-                PointId::BustBack,
-                PointId::BustLeft,
-                PointId::BustRight,
-            ],
-        ),
+        ("bust-circ", [PointId::BustFront, PointId::BustBack, PointId::BustLeft, PointId::BustRight]),
         (
             "underbust-circ",
-            [
-                PointId::UnderbustFront,
-                PointId::UnderbustBack,
-                PointId::UnderbustLeft,
-                PointId::UnderbustRight,
-            ],
+            [PointId::UnderbustFront, PointId::UnderbustBack, PointId::UnderbustLeft, PointId::UnderbustRight],
         ),
-        (
-            "waist-circ",
-            [
-                PointId::WaistFront,
-                PointId::WaistBack,
-                PointId::WaistLeft,
-                PointId::WaistRight,
-            ],
-        ),
-        (
-            "hips-circ",
-            [PointId::HipFront, PointId::HipBack, PointId::HipLeft, PointId::HipRight],
-        ),
+        ("waist-circ", [PointId::WaistFront, PointId::WaistBack, PointId::WaistLeft, PointId::WaistRight]),
+        ("hips-circ", [PointId::HipFront, PointId::HipBack, PointId::HipLeft, PointId::HipRight]),
     ];
     for (name, [front, back, left, right]) in girths {
         let r = ring(mesh, ring_ids(name));
         let mid = plane_crossings(&r, &sagittal);
-        lm.points.insert(
-            front,
-            extreme(&mid, |p| p.z).ok_or_else(|| err(front, "ring misses x = 0"))?,
-        );
-        lm.points.insert(
-            back,
-            extreme(&mid, |p| -p.z).ok_or_else(|| err(back, "ring misses x = 0"))?,
-        );
-        let coronal = Plane {
-            normal: DVec3::Z,
-            offset: r.centroid().z,
-        };
+        lm.points.insert(front, on_midline(extreme(&mid, |p| p.z).ok_or_else(|| err(front, "ring misses x = 0"))?));
+        lm.points.insert(back, on_midline(extreme(&mid, |p| -p.z).ok_or_else(|| err(back, "ring misses x = 0"))?));
+        let coronal = Plane { normal: DVec3::Z, offset: r.centroid().z };
         let side = plane_crossings(&r, &coronal);
-        lm.points.insert(
-            left,
-            extreme(&side, |p| p.x).ok_or_else(|| err(left, "ring misses its coronal plane"))?,
-        );
-        lm.points.insert(
-            right,
-            extreme(&side, |p| -p.x).ok_or_else(|| err(right, "ring misses its coronal plane"))?,
-        );
+        lm.points.insert(left, extreme(&side, |p| p.x).ok_or_else(|| err(left, "ring misses its coronal plane"))?);
+        lm.points.insert(right, extreme(&side, |p| -p.x).ok_or_else(|| err(right, "ring misses its coronal plane"))?);
     }
     // neck base: the plane through the side neck points (medial end of
     // MakeHuman's `shoulder-dist`, and its mirror), containing the lateral
@@ -195,14 +158,8 @@ pub fn hm08_landmarks(
         .min_by(|a, b| a.length().total_cmp(&b.length()))
         .ok_or_else(|| err(PointId::NeckFront, "the neck base plane misses the neck"))?;
     let mid = plane_crossings(&neck, &sagittal);
-    lm.points.insert(
-        PointId::NeckFront,
-        extreme(&mid, |p| p.z).ok_or_else(|| err(PointId::NeckFront, "no front"))?,
-    );
-    lm.points.insert(
-        PointId::NeckBack,
-        extreme(&mid, |p| -p.z).ok_or_else(|| err(PointId::NeckBack, "no back"))?,
-    );
+    lm.points.insert(PointId::NeckFront, extreme(&mid, |p| p.z).ok_or_else(|| err(PointId::NeckFront, "no front"))?);
+    lm.points.insert(PointId::NeckBack, extreme(&mid, |p| -p.z).ok_or_else(|| err(PointId::NeckBack, "no back"))?);
     lm.points.insert(PointId::NeckLeft, nl);
     lm.points.insert(PointId::NeckRight, nr);
     let limbs = [
@@ -215,33 +172,11 @@ pub fn hm08_landmarks(
         let rl = ring(mesh, ids.iter().copied());
         let rr = ring(mesh, ids.iter().map(|&v| model.mirror(v)));
         // make sure "left" is the ring on +X whatever side the data uses
-        let (rl, rr) = if rl.centroid().x >= rr.centroid().x {
-            (rl, rr)
-        } else {
-            (rr, rl)
-        };
-        let cl = plane_crossings(
-            &rl,
-            &Plane {
-                normal: DVec3::Z,
-                offset: rl.centroid().z,
-            },
-        );
-        let cr = plane_crossings(
-            &rr,
-            &Plane {
-                normal: DVec3::Z,
-                offset: rr.centroid().z,
-            },
-        );
-        lm.points.insert(
-            left,
-            extreme(&cl, |p| p.x).ok_or_else(|| err(left, "ring misses its coronal plane"))?,
-        );
-        lm.points.insert(
-            right,
-            extreme(&cr, |p| -p.x).ok_or_else(|| err(right, "ring misses its coronal plane"))?,
-        );
+        let (rl, rr) = if rl.centroid().x >= rr.centroid().x { (rl, rr) } else { (rr, rl) };
+        let cl = plane_crossings(&rl, &Plane { normal: DVec3::Z, offset: rl.centroid().z });
+        let cr = plane_crossings(&rr, &Plane { normal: DVec3::Z, offset: rr.centroid().z });
+        lm.points.insert(left, extreme(&cl, |p| p.x).ok_or_else(|| err(left, "ring misses its coronal plane"))?);
+        lm.points.insert(right, extreme(&cr, |p| -p.x).ok_or_else(|| err(right, "ring misses its coronal plane"))?);
     }
     // shoulders: the lateral end of MakeHuman's shoulder-dist measure
     let sd = ring_ids("shoulder-dist");
@@ -264,15 +199,11 @@ pub fn hm08_landmarks(
     lm.points.insert(PointId::Crotch, crotch);
     // armpits: on the coronal section through the upper arm
     let arm_z = ring(mesh, ring_ids("upperarm-circ")).centroid().z;
-    for (bust, id, sign) in [
-        (PointId::BustLeft, PointId::UnderarmLeft, 1.0),
-        (PointId::BustRight, PointId::UnderarmRight, -1.0),
-    ] {
+    for (bust, id, sign) in
+        [(PointId::BustLeft, PointId::UnderarmLeft, 1.0), (PointId::BustRight, PointId::UnderarmRight, -1.0)]
+    {
         let start_y = lm.points[&bust].y;
-        lm.points.insert(
-            id,
-            armpit(mesh, arm_z, start_y, sign).ok_or_else(|| err(id, "no armpit above the bust"))?,
-        );
+        lm.points.insert(id, armpit(mesh, arm_z, start_y, sign).ok_or_else(|| err(id, "no armpit above the bust"))?);
     }
     Ok(lm)
 }
@@ -281,14 +212,8 @@ pub fn hm08_landmarks(
 /// height `start_y` (the crossing nearest the midline on the side `sign`)
 /// and walks up to the first local maximum of height.
 fn armpit(mesh: &TriMesh, arm_z: f64, start_y: f64, sign: f64) -> Option<DVec3> {
-    let plane = Plane {
-        normal: DVec3::Z,
-        offset: arm_z,
-    };
-    let level = Plane {
-        normal: DVec3::Y,
-        offset: start_y,
-    };
+    let plane = Plane { normal: DVec3::Z, offset: arm_z };
+    let level = Plane { normal: DVec3::Y, offset: start_y };
     let mut best: Option<(f64, Polyline, DVec3)> = None;
     for s in slice(mesh, &plane).into_iter().filter(|s| s.polyline.closed) {
         for p in plane_crossings(&s.polyline, &level) {
@@ -300,16 +225,8 @@ fn armpit(mesh: &TriMesh, arm_z: f64, start_y: f64, sign: f64) -> Option<DVec3> 
     }
     let (_, poly, start) = best?;
     let n = poly.points.len();
-    let i0 = (0..n).min_by(|&a, &b| {
-        poly.points[a]
-            .distance(start)
-            .total_cmp(&poly.points[b].distance(start))
-    })?;
-    let up = if poly.points[(i0 + 1) % n].y >= poly.points[(i0 + n - 1) % n].y {
-        1
-    } else {
-        n - 1
-    };
+    let i0 = (0..n).min_by(|&a, &b| poly.points[a].distance(start).total_cmp(&poly.points[b].distance(start)))?;
+    let up = if poly.points[(i0 + 1) % n].y >= poly.points[(i0 + n - 1) % n].y { 1 } else { n - 1 };
     let mut i = i0;
     for _ in 0..n {
         let j = (i + up) % n;

@@ -2,6 +2,7 @@
 
 pub mod data;
 pub mod fit;
+pub mod fixtures;
 pub mod landmarks;
 pub mod model;
 pub mod size_chart;

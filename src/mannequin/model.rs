@@ -139,12 +139,7 @@ fn check(name: &str, value: f64, min: f64, max: f64) -> Result<f64, MannequinErr
     if value.is_finite() && value >= min && value <= max {
         Ok(value)
     } else {
-        Err(MannequinError::OutOfRange {
-            name: name.to_owned(),
-            value,
-            min,
-            max,
-        })
+        Err(MannequinError::OutOfRange { name: name.to_owned(), value, min, max })
     }
 }
 
@@ -159,19 +154,12 @@ impl BodyModel {
     /// The embedded model, decoded once per process.
     pub fn embedded() -> Result<&'static BodyModel, MannequinError> {
         static MODEL: OnceLock<Result<BodyModel, MannequinError>> = OnceLock::new();
-        MODEL
-            .get_or_init(|| Self::from_data(data::decode(EMBEDDED)?))
-            .as_ref()
-            .map_err(Clone::clone)
+        MODEL.get_or_init(|| Self::from_data(data::decode(EMBEDDED)?)).as_ref().map_err(Clone::clone)
     }
 
     /// A model from decoded data.
     pub fn from_data(data: Hm08Data) -> Result<Self, MannequinError> {
-        let triangles = data
-            .triangles
-            .iter()
-            .map(|t| t.map(|v| VertexId(u32::from(v))))
-            .collect();
+        let triangles = data.triangles.iter().map(|t| t.map(|v| VertexId(u32::from(v)))).collect();
         Ok(Self { data, triangles })
     }
 
@@ -193,9 +181,7 @@ impl BodyModel {
             .keys()
             .filter(|k| !k.starts_with("macrodetails"))
             .filter_map(|k| {
-                MODIFIER_PAIRS
-                    .iter()
-                    .find_map(|(p, _)| k.strip_suffix(&format!("-{p}")).map(str::to_owned))
+                MODIFIER_PAIRS.iter().find_map(|(p, _)| k.strip_suffix(&format!("-{p}")).map(str::to_owned))
             })
             .collect();
         out.sort();
@@ -228,14 +214,8 @@ impl BodyModel {
         let muscles = [("minmuscle", m0), ("averagemuscle", m1), ("maxmuscle", m2)];
         let [w0, w1, w2] = three_level(w);
         let weights = [("minweight", w0), ("averageweight", w1), ("maxweight", w2)];
-        let heights = [
-            ("maxheight", (2.0 * h - 1.0).max(0.0)),
-            ("minheight", (1.0 - 2.0 * h).max(0.0)),
-        ];
-        let props = [
-            ("idealproportions", (2.0 * p - 1.0).max(0.0)),
-            ("uncommonproportions", (1.0 - 2.0 * p).max(0.0)),
-        ];
+        let heights = [("maxheight", (2.0 * h - 1.0).max(0.0)), ("minheight", (1.0 - 2.0 * h).max(0.0))];
+        let props = [("idealproportions", (2.0 * p - 1.0).max(0.0)), ("uncommonproportions", (1.0 - 2.0 * p).max(0.0))];
 
         let mut out: Vec<(&str, f64)> = Vec::new();
         let mut push = |name: String, weight: f64| {

@@ -107,10 +107,7 @@ pub struct SizeChartOptions {
 
 impl Default for SizeChartOptions {
     fn default() -> Self {
-        Self {
-            max_sizes: 40,
-            figure: FigureType::Curvy,
-        }
+        Self { max_sizes: 40, figure: FigureType::Curvy }
     }
 }
 
@@ -247,19 +244,13 @@ fn column(name: &str, figure: FigureType) -> Result<(Column, MeasurementId), Siz
     if let Some(a) = alias {
         return Ok(a);
     }
-    let id: MeasurementId = n
-        .parse()
-        .map_err(|_| SizeChartError::UnknownColumn { column: n.to_owned() })?;
+    let id: MeasurementId = n.parse().map_err(|_| SizeChartError::UnknownColumn { column: n.to_owned() })?;
     Ok((Column::Target(id), id))
 }
 
 fn check_value(size: &str, col: &str, id: MeasurementId, value: f64, unit: Unit) -> Result<f64, SizeChartError> {
     if !value.is_finite() {
-        return Err(SizeChartError::NotANumber {
-            size: size.into(),
-            column: col.into(),
-            value: value.to_string(),
-        });
+        return Err(SizeChartError::NotANumber { size: size.into(), column: col.into(), value: value.to_string() });
     }
     let (lo, hi) = plausible_range_cm(id);
     let cm = value * unit.metres() * 100.0;
@@ -268,20 +259,9 @@ fn check_value(size: &str, col: &str, id: MeasurementId, value: f64, unit: Unit)
     }
     let as_in = value * 2.54;
     if unit == Unit::Cm && as_in >= lo && as_in <= hi {
-        return Err(SizeChartError::LikelyInches {
-            size: size.into(),
-            column: col.into(),
-            value,
-            as_cm: as_in,
-        });
+        return Err(SizeChartError::LikelyInches { size: size.into(), column: col.into(), value, as_cm: as_in });
     }
-    Err(SizeChartError::OutOfRange {
-        size: size.into(),
-        column: col.into(),
-        value_cm: cm,
-        min_cm: lo,
-        max_cm: hi,
-    })
+    Err(SizeChartError::OutOfRange { size: size.into(), column: col.into(), value_cm: cm, min_cm: lo, max_cm: hi })
 }
 
 struct RawRow {
@@ -305,16 +285,10 @@ fn finish(
         return Err(SizeChartError::Empty);
     }
     if raw.len() > opts.max_sizes {
-        return Err(SizeChartError::TooManySizes {
-            count: raw.len(),
-            max: opts.max_sizes,
-        });
+        return Err(SizeChartError::TooManySizes { count: raw.len(), max: opts.max_sizes });
     }
     let parse_unit = |size: &str, u: &str| -> Result<Unit, SizeChartError> {
-        u.parse().map_err(|_| SizeChartError::UnknownUnit {
-            size: size.into(),
-            unit: u.into(),
-        })
+        u.parse().map_err(|_| SizeChartError::UnknownUnit { size: size.into(), unit: u.into() })
     };
     let mut rows: Vec<SizeRow> = Vec::new();
     for r in raw {
@@ -360,31 +334,17 @@ fn finish(
         if targets.is_empty() {
             return Err(SizeChartError::EmptyRow { size: r.size });
         }
-        rows.push(SizeRow {
-            size: r.size,
-            targets,
-            alternatives,
-        });
+        rows.push(SizeRow { size: r.size, targets, alternatives });
     }
     Ok(SizeChart { figure, rows })
 }
 
 /// Parses a CSV size chart.
 pub fn parse_csv(text: &str, opts: &SizeChartOptions) -> Result<SizeChart, SizeChartError> {
-    let mut rdr = csv::ReaderBuilder::new()
-        .comment(Some(b'#'))
-        .trim(csv::Trim::All)
-        .from_reader(text.as_bytes());
-    let headers: Vec<String> = rdr
-        .headers()
-        .map_err(|e| SizeChartError::Syntax(e.to_string()))?
-        .iter()
-        .map(str::to_owned)
-        .collect();
-    let size_col = headers
-        .iter()
-        .position(|h| h == "size")
-        .ok_or(SizeChartError::NoSizeColumn)?;
+    let mut rdr = csv::ReaderBuilder::new().comment(Some(b'#')).trim(csv::Trim::All).from_reader(text.as_bytes());
+    let headers: Vec<String> =
+        rdr.headers().map_err(|e| SizeChartError::Syntax(e.to_string()))?.iter().map(str::to_owned).collect();
+    let size_col = headers.iter().position(|h| h == "size").ok_or(SizeChartError::NoSizeColumn)?;
     let unit_col = headers.iter().position(|h| h == "unit");
     for (i, h) in headers.iter().enumerate() {
         if i != size_col && Some(i) != unit_col {
@@ -395,16 +355,10 @@ pub fn parse_csv(text: &str, opts: &SizeChartOptions) -> Result<SizeChart, SizeC
     for rec in rdr.records() {
         let rec = rec.map_err(|e| SizeChartError::Syntax(e.to_string()))?;
         if raw.len() >= opts.max_sizes {
-            return Err(SizeChartError::TooManySizes {
-                count: raw.len() + 1,
-                max: opts.max_sizes,
-            });
+            return Err(SizeChartError::TooManySizes { count: raw.len() + 1, max: opts.max_sizes });
         }
         let size = rec.get(size_col).unwrap_or("").to_owned();
-        let unit = unit_col
-            .and_then(|c| rec.get(c))
-            .filter(|u| !u.is_empty())
-            .map(str::to_owned);
+        let unit = unit_col.and_then(|c| rec.get(c)).filter(|u| !u.is_empty()).map(str::to_owned);
         let values = headers
             .iter()
             .enumerate()
@@ -443,10 +397,7 @@ enum JsonValue {
 pub fn parse_json(text: &str, opts: &SizeChartOptions) -> Result<SizeChart, SizeChartError> {
     let c: JsonChart = serde_json::from_str(text).map_err(|e| SizeChartError::Syntax(e.to_string()))?;
     if c.sizes.len() > opts.max_sizes {
-        return Err(SizeChartError::TooManySizes {
-            count: c.sizes.len(),
-            max: opts.max_sizes,
-        });
+        return Err(SizeChartError::TooManySizes { count: c.sizes.len(), max: opts.max_sizes });
     }
     let figure = c.figure.unwrap_or(opts.figure);
     let raw = c
@@ -486,14 +437,7 @@ mod tests {
         assert!((s8.targets[&MeasurementId::WaistGirth] - 28.0 * 0.0254).abs() < 1e-12);
         assert!((s8.targets[&MeasurementId::ChestGirth] - 35.875 * 0.0254).abs() < 1e-12);
         assert!(s8.alternatives.contains_key("waist_girth_straight"));
-        let st = parse_csv(
-            ASTM,
-            &SizeChartOptions {
-                figure: FigureType::Straight,
-                ..Default::default()
-            },
-        )
-        .unwrap();
+        let st = parse_csv(ASTM, &SizeChartOptions { figure: FigureType::Straight, ..Default::default() }).unwrap();
         assert!((st.rows[5].targets[&MeasurementId::WaistGirth] - 29.5 * 0.0254).abs() < 1e-12);
     }
 
@@ -509,60 +453,29 @@ mod tests {
     #[test]
     fn unknown_column_is_named() {
         let e = parse_csv("size,bust_girth,elbow_wobble\nM,90,3\n", &SizeChartOptions::default()).unwrap_err();
-        assert_eq!(
-            e,
-            SizeChartError::UnknownColumn {
-                column: "elbow_wobble".into()
-            }
-        );
-        let e = parse_json(
-            r#"{"sizes":[{"size":"M","measurements":{"elbow_wobble":3}}]}"#,
-            &SizeChartOptions::default(),
-        )
-        .unwrap_err();
-        assert_eq!(
-            e,
-            SizeChartError::UnknownColumn {
-                column: "elbow_wobble".into()
-            }
-        );
+        assert_eq!(e, SizeChartError::UnknownColumn { column: "elbow_wobble".into() });
+        let e =
+            parse_json(r#"{"sizes":[{"size":"M","measurements":{"elbow_wobble":3}}]}"#, &SizeChartOptions::default())
+                .unwrap_err();
+        assert_eq!(e, SizeChartError::UnknownColumn { column: "elbow_wobble".into() });
     }
 
     #[test]
     fn other_bad_values() {
         let o = SizeChartOptions::default();
-        assert!(matches!(
-            parse_csv("size,bust_girth\nM,abc\n", &o),
-            Err(SizeChartError::NotANumber { .. })
-        ));
-        assert!(matches!(
-            parse_csv("size,bust_girth\nM,NaN\n", &o),
-            Err(SizeChartError::NotANumber { .. })
-        ));
-        assert!(matches!(
-            parse_csv("size,bust_girth\nM,900\n", &o),
-            Err(SizeChartError::OutOfRange { .. })
-        ));
+        assert!(matches!(parse_csv("size,bust_girth\nM,abc\n", &o), Err(SizeChartError::NotANumber { .. })));
+        assert!(matches!(parse_csv("size,bust_girth\nM,NaN\n", &o), Err(SizeChartError::NotANumber { .. })));
+        assert!(matches!(parse_csv("size,bust_girth\nM,900\n", &o), Err(SizeChartError::OutOfRange { .. })));
         assert!(matches!(
             parse_csv("size,unit,bust_girth\nM,furlong,90\n", &o),
             Err(SizeChartError::UnknownUnit { .. })
         ));
-        assert!(matches!(
-            parse_csv("bust_girth\n90\n", &o),
-            Err(SizeChartError::NoSizeColumn)
-        ));
-        assert!(matches!(
-            parse_csv("size,bust_girth\nM,90\nM,92\n", &o),
-            Err(SizeChartError::DuplicateSize { .. })
-        ));
+        assert!(matches!(parse_csv("bust_girth\n90\n", &o), Err(SizeChartError::NoSizeColumn)));
+        assert!(matches!(parse_csv("size,bust_girth\nM,90\nM,92\n", &o), Err(SizeChartError::DuplicateSize { .. })));
         assert!(matches!(parse_csv("size,bust_girth\n", &o), Err(SizeChartError::Empty)));
-        assert!(matches!(
-            parse_csv("size,bust_girth\nM,\n", &o),
-            Err(SizeChartError::EmptyRow { .. })
-        ));
-        let many: String = std::iter::once("size,bust_girth\n".to_owned())
-            .chain((0..41).map(|i| format!("{i},90\n")))
-            .collect();
+        assert!(matches!(parse_csv("size,bust_girth\nM,\n", &o), Err(SizeChartError::EmptyRow { .. })));
+        let many: String =
+            std::iter::once("size,bust_girth\n".to_owned()).chain((0..41).map(|i| format!("{i},90\n"))).collect();
         assert!(matches!(parse_csv(&many, &o), Err(SizeChartError::TooManySizes { .. })));
     }
 

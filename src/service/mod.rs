@@ -10,7 +10,5 @@ pub struct AppState {}
 
 /// The service's router.
 pub fn app(state: AppState) -> Router {
-    Router::new()
-        .route("/healthz", get(|| async { "ok" }))
-        .with_state(state)
+    Router::new().route("/healthz", get(|| async { "ok" })).with_state(state)
 }

@@ -1,0 +1,246 @@
+//! Feature human models on real fixtures: frames, size-chart fits, the
+//! scan path on a re-meshed body, and bad input.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use glam::DVec3;
+use grade3d::body::derive::{derive_features, DeriveOptions, FeatureError, Landmarks};
+use grade3d::body::feature::FeatureBody;
+use grade3d::body::measure::{measure, MeasurementId};
+use grade3d::body::vocab::{CurveId, PointId};
+use grade3d::geom::mesh::{MeshError, TriMesh};
+use grade3d::geom::polyline::Polyline;
+use grade3d::geom::simplify::{remesh_unrelated, SimplifyOptions};
+use grade3d::io::gltf::{read_mesh, GltfReadOptions};
+use grade3d::io::landmarks::parse_landmarks;
+use grade3d::mannequin::fit::{fit_size, FitOptions};
+use grade3d::mannequin::model::BodyModel;
+use grade3d::mannequin::size_chart::{parse_csv, FigureType, SizeChartError, SizeChartOptions};
+use proptest::prelude::*;
+
+fn fixtures() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures")
+}
+
+/// Every fixture body: (name, mesh, landmarks).
+fn fixture_bodies() -> Vec<(String, TriMesh, Landmarks)> {
+    let mut out = Vec::new();
+    for sub in ["bodies", "astm"] {
+        let dir = fixtures().join(sub);
+        let mut names: Vec<String> = std::fs::read_dir(&dir)
+            .unwrap()
+            .filter_map(|e| e.ok()?.file_name().into_string().ok())
+            .filter_map(|n| n.strip_suffix(".glb").map(str::to_owned))
+            .collect();
+        names.sort();
+        for n in names {
+            let mesh =
+                read_mesh(&std::fs::read(dir.join(format!("{n}.glb"))).unwrap(), &GltfReadOptions::default()).unwrap();
+            let lm =
+                parse_landmarks(&std::fs::read_to_string(dir.join(format!("{n}.landmarks.json"))).unwrap()).unwrap();
+            out.push((format!("{sub}/{n}"), mesh, lm));
+        }
+    }
+    assert!(out.len() >= 20, "expected 8 bodies and 12 sizes, found {}", out.len());
+    out
+}
+
+fn derive(mesh: TriMesh, lm: &Landmarks) -> FeatureBody {
+    derive_features(mesh, lm, &DeriveOptions::default()).unwrap()
+}
+
+#[test]
+fn every_fixture_point_has_a_sound_frame() {
+    let mut worst = (f64::INFINITY, String::new());
+    for (name, mesh, lm) in fixture_bodies() {
+        let body = derive(mesh, &lm);
+        assert_eq!(body.points.len(), PointId::ALL.len(), "{name}");
+        for (id, p) in &body.points {
+            let t = p.frame.triple().abs();
+            assert!(t >= 0.1, "{name}: frame at {id} has triple product {t}");
+            if t < worst.0 {
+                worst = (t, format!("{name} {id}"));
+            }
+        }
+    }
+    eprintln!("smallest |t1·(t2×n)| over all fixtures: {:.3} at {}", worst.0, worst.1);
+}
+
+#[test]
+fn degenerate_frame_is_rejected_naming_the_point() {
+    let (_, mesh, mut lm) = fixture_bodies().swap_remove(1);
+    // A crotch line laid along the centre front makes t(f1) ∥ t(f2).
+    let body = derive(mesh.clone(), &lm);
+    let cf = body.curves[&CurveId::CentreFront].polyline.clone();
+    lm.curves.insert(CurveId::CrotchLine, Polyline::new(cf.points, true));
+    let e = derive_features(mesh, &lm, &DeriveOptions::default()).unwrap_err();
+    match e {
+        FeatureError::DegenerateFrame { point, triple, .. } => {
+            assert_eq!(point, PointId::Crotch);
+            assert!(triple.abs() < 0.1);
+        }
+        other => panic!("expected a degenerate frame, got {other}"),
+    }
+}
+
+fn fit_chart(figure: FigureType) -> BTreeMap<MeasurementId, f64> {
+    let text = std::fs::read_to_string(fixtures().join("size-charts/astm-d5585-11-misses-partial.csv")).unwrap();
+    let chart = parse_csv(&text, &SizeChartOptions { figure, ..Default::default() }).unwrap();
+    assert_eq!(chart.rows.len(), 12);
+    let model = BodyModel::embedded().unwrap();
+    let mut worst: BTreeMap<MeasurementId, f64> = BTreeMap::new();
+    for row in &chart.rows {
+        let f = fit_size(model, row, &FitOptions::default()).unwrap();
+        for (id, r) in &f.residuals {
+            let e = r.error_mm().abs();
+            assert!(e <= 5.0, "{figure:?} size {}: {id} off by {e:.2} mm", row.size);
+            let w = worst.entry(*id).or_insert(0.0);
+            *w = w.max(e);
+        }
+        assert_eq!(f.residuals.len(), row.targets.len());
+    }
+    eprintln!("{figure:?}: worst residual per measurement (mm): {worst:.3?}");
+    worst
+}
+
+#[test]
+fn astm_sizes_fit_within_half_a_centimetre_curvy() {
+    let w = fit_chart(FigureType::Curvy);
+    assert_eq!(w.len(), 6);
+}
+
+#[test]
+fn astm_sizes_fit_within_half_a_centimetre_straight() {
+    fit_chart(FigureType::Straight);
+}
+
+#[test]
+fn remeshed_scan_reproduces_girths_and_points() {
+    let bodies = fixture_bodies();
+    let mut worst_girth = (0.0f64, String::new());
+    let mut worst_point = (0.0f64, String::new());
+    for (name, mesh, lm) in bodies.into_iter().filter(|(n, ..)| n.starts_with("bodies/")) {
+        let remeshed = remesh_unrelated(&mesh, 60_000, &SimplifyOptions::default()).unwrap();
+        assert!((remeshed.face_count() as f64 - 60_000.0).abs() < 600.0, "{name}: {}", remeshed.face_count());
+        let original = derive(mesh, &lm);
+        let scan_lm = Landmarks { points: lm.points.clone(), curves: BTreeMap::new() };
+        let scan = derive(remeshed, &scan_lm);
+        let (mo, ms) = (measure(&original, &Default::default()), measure(&scan, &Default::default()));
+        for (id, v) in &mo {
+            if !id.is_girth() {
+                continue;
+            }
+            let d = (ms[id] - v).abs() * 1e3;
+            assert!(d <= 10.0, "{name}: {id} differs by {d:.2} mm");
+            if d > worst_girth.0 {
+                worst_girth = (d, format!("{name} {id}"));
+            }
+        }
+        for (id, p) in &original.points {
+            let d = scan.points[id].position.distance(p.position) * 1e3;
+            assert!(d <= 10.0, "{name}: {id} moved {d:.2} mm: {:?} -> {:?}", p.position, scan.points[id].position);
+            if d > worst_point.0 {
+                worst_point = (d, format!("{name} {id}"));
+            }
+        }
+    }
+    eprintln!(
+        "re-meshed scans: worst girth difference {:.2} mm ({}), worst point {:.2} mm ({})",
+        worst_girth.0, worst_girth.1, worst_point.0, worst_point.1
+    );
+}
+
+fn a_body() -> (TriMesh, Landmarks) {
+    let (_, m, l) = fixture_bodies().swap_remove(0);
+    (m, l)
+}
+
+#[test]
+fn bad_meshes_are_typed_errors() {
+    let (mesh, _) = a_body();
+    let mut pos = mesh.positions().to_vec();
+    pos[17].y = f64::NAN;
+    let raw: Vec<[u64; 3]> = mesh.triangles().iter().map(|t| t.map(|v| u64::from(v.0))).collect();
+    assert_eq!(TriMesh::from_raw(pos, &raw), Err(MeshError::NonFinite { vertex: 17 }));
+    let mut bad = raw.clone();
+    bad[5][1] = 1_000_000;
+    assert!(matches!(
+        TriMesh::from_raw(mesh.positions().to_vec(), &bad),
+        Err(MeshError::IndexOutOfRange { face: 5, index: 1_000_000, .. })
+    ));
+    assert!(matches!(TriMesh::from_raw(vec![], &[]), Err(MeshError::Empty { .. })));
+}
+
+#[test]
+fn implausible_stature_is_rejected() {
+    let (mesh, lm) = a_body();
+    for scale in [100.0, 0.001] {
+        let scaled = mesh.map_positions(|p| p * scale).unwrap();
+        let lm2 =
+            Landmarks { points: lm.points.iter().map(|(k, v)| (*k, *v * scale)).collect(), curves: BTreeMap::new() };
+        match derive_features(scaled, &lm2, &DeriveOptions::default()) {
+            Err(FeatureError::BodySize { stature_m, .. }) => assert!(!(0.01..=100.0).contains(&stature_m)),
+            other => panic!("scale {scale}: expected BodySize, got {other:?}"),
+        }
+    }
+}
+
+#[test]
+fn missing_landmark_is_named() {
+    let (mesh, mut lm) = a_body();
+    lm.points.remove(&PointId::WaistLeft);
+    match derive_features(mesh, &lm, &DeriveOptions::default()) {
+        Err(FeatureError::MissingLandmarks { missing }) => assert_eq!(missing, vec![PointId::WaistLeft]),
+        other => panic!("expected MissingLandmarks, got {other:?}"),
+    }
+}
+
+#[test]
+fn off_surface_and_non_finite_landmarks_are_named() {
+    let (mesh, mut lm) = a_body();
+    let mut far = lm.clone();
+    *far.points.get_mut(&PointId::HipBack).unwrap() += DVec3::Z * -0.2;
+    assert!(matches!(
+        derive_features(mesh.clone(), &far, &DeriveOptions::default()),
+        Err(FeatureError::LandmarkOffSurface { point: PointId::HipBack, .. })
+    ));
+    lm.points.insert(PointId::Crotch, DVec3::new(0.0, f64::INFINITY, 0.0));
+    assert!(matches!(
+        derive_features(mesh, &lm, &DeriveOptions::default()),
+        Err(FeatureError::NonFiniteLandmark { point: PointId::Crotch })
+    ));
+}
+
+#[test]
+fn size_chart_errors_name_the_problem() {
+    let o = SizeChartOptions::default();
+    assert!(matches!(
+        parse_csv("size,unit,bust_girth\n10,cm,36\n", &o),
+        Err(SizeChartError::LikelyInches { ref column, .. }) if column == "bust_girth"
+    ));
+    assert!(matches!(
+        parse_csv("size,bust_girth,wingspan\n10,90,170\n", &o),
+        Err(SizeChartError::UnknownColumn { ref column }) if column == "wingspan"
+    ));
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 8, ..ProptestConfig::default() })]
+    /// Planted answer: translating a body and its landmarks translates
+    /// every feature point by the same vector and leaves frames unchanged.
+    #[test]
+    fn translation_commutes_with_feature_derivation(dx in -2.0f64..2.0, dy in -2.0f64..2.0, dz in -2.0f64..2.0) {
+        let (mesh, lm) = a_body();
+        let t = DVec3::new(dx, dy, dz);
+        let a = derive(mesh.clone(), &lm);
+        let moved = mesh.map_positions(|p| p + t).unwrap();
+        let lm2 = Landmarks { points: lm.points.iter().map(|(k, v)| (*k, *v + t)).collect(), curves: BTreeMap::new() };
+        let b = derive(moved, &lm2);
+        for (id, p) in &a.points {
+            let q = &b.points[id];
+            prop_assert!((q.position - p.position - t).length() < 1e-6, "{id}");
+            prop_assert!((q.frame.n - p.frame.n).length() < 1e-6, "{id}");
+        }
+    }
+}
