@@ -21,6 +21,21 @@ enum Command {
         #[arg(long, env = "GRADE3D_ADDR", default_value = "127.0.0.1:8080")]
         addr: SocketAddr,
     },
+    /// Fit one mannequin per size of a size chart (CSV or JSON) and print the residuals.
+    FitChart {
+        /// The size chart.
+        chart: PathBuf,
+        /// ASTM figure type for the waist column (curvy or straight).
+        #[arg(long, default_value = "curvy")]
+        figure: String,
+    },
+    /// Derive the feature human model of a body scan and print its measurements and frames.
+    Measure {
+        /// The body (GLB or glTF with embedded buffers).
+        body: PathBuf,
+        /// Its landmarks JSON.
+        landmarks: PathBuf,
+    },
     /// Regenerate shipped data from ../shared sources.
     Data {
         #[command(subcommand)]
@@ -91,6 +106,8 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
             );
         }
         Command::Data { what: DataCommand::Fixtures { dir } } => write_fixtures(&dir)?,
+        Command::FitChart { chart, figure } => fit_chart(&chart, &figure)?,
+        Command::Measure { body, landmarks } => measure_body(&body, &landmarks)?,
     }
     Ok(())
 }
@@ -139,5 +156,50 @@ fn write_fixtures(dir: &std::path::Path) -> Result<(), Box<dyn std::error::Error
         println!("wrote size {}", row.size);
     }
     std::fs::write(astm.join("fit-report.json"), serde_json::to_string_pretty(&report)? + "\n")?;
+    Ok(())
+}
+
+fn fit_chart(path: &std::path::Path, figure: &str) -> Result<(), Box<dyn std::error::Error>> {
+    use grade3d::mannequin::{fit, model::BodyModel, size_chart};
+    let figure = match figure {
+        "curvy" => size_chart::FigureType::Curvy,
+        "straight" => size_chart::FigureType::Straight,
+        other => return Err(format!("unknown figure type `{other}` (curvy or straight)").into()),
+    };
+    let text = std::fs::read_to_string(path)?;
+    let opts = size_chart::SizeChartOptions { figure, ..Default::default() };
+    let chart = if text.trim_start().starts_with('{') {
+        size_chart::parse_json(&text, &opts)?
+    } else {
+        size_chart::parse_csv(&text, &opts)?
+    };
+    let model = BodyModel::embedded()?;
+    for row in &chart.rows {
+        let f = fit::fit_size(model, row, &fit::FitOptions::default())?;
+        print!("size {:>4}:", row.size);
+        for (id, r) in &f.residuals {
+            print!("  {id} {:.1} cm ({:+.2} mm)", r.target_m * 100.0, r.error_mm());
+        }
+        println!();
+    }
+    Ok(())
+}
+
+fn measure_body(body: &std::path::Path, landmarks: &std::path::Path) -> Result<(), Box<dyn std::error::Error>> {
+    let mesh = grade3d::io::gltf::read_mesh(&std::fs::read(body)?, &Default::default())?;
+    let lm = grade3d::io::landmarks::parse_landmarks(&std::fs::read_to_string(landmarks)?)?;
+    let fb = grade3d::body::derive::derive_features(mesh, &lm, &Default::default())?;
+    for (id, v) in grade3d::body::measure::measure(&fb, &Default::default()) {
+        println!("{id:>18}  {:7.1} cm", v * 100.0);
+    }
+    for (id, p) in &fb.points {
+        println!(
+            "{id:>18}  {:+.4} {:+.4} {:+.4}  |t1.(t2xn)| {:.3}",
+            p.position.x,
+            p.position.y,
+            p.position.z,
+            p.frame.triple().abs()
+        );
+    }
     Ok(())
 }

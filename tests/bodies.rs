@@ -151,6 +151,26 @@ fn remeshed_scan_reproduces_girths_and_points() {
     );
 }
 
+#[test]
+fn unwelded_scan_gives_the_same_features() {
+    // Every triangle with its own three vertices, as some exporters write.
+    let (mesh, lm) = a_body();
+    let mut pos = Vec::new();
+    let mut tris = Vec::new();
+    for t in mesh.triangles() {
+        let base = pos.len() as u64;
+        pos.extend(t.iter().map(|v| mesh.position(*v)));
+        tris.push([base, base + 1, base + 2]);
+    }
+    let split = TriMesh::from_raw(pos, &tris).unwrap();
+    assert_eq!(split.vertex_count(), 3 * mesh.face_count());
+    let a = derive(mesh, &lm);
+    let b = derive(split, &lm);
+    for (id, p) in &a.points {
+        assert!(b.points[id].position.distance(p.position) < 1e-9, "{id}");
+    }
+}
+
 fn a_body() -> (TriMesh, Landmarks) {
     let (_, m, l) = fixture_bodies().swap_remove(0);
     (m, l)

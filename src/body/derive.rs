@@ -3,7 +3,8 @@
 //! The one path by which every body — a scan of any topology or the
 //! embedded mannequin — becomes a [`FeatureBody`]:
 //!
-//! 1. **Check** the mesh: stature (bounding-box height) within
+//! 1. **Weld** vertices closer than [`DeriveOptions::weld_tolerance_mm`]
+//!    (split seams would cut plane sections into pieces), then **check** the mesh: stature (bounding-box height) within
 //!    [`DeriveOptions::min_stature_m`, `max_stature_m`]; every landmark the
 //!    vocabulary's curve rules need is present and finite.
 //! 2. **Snap** each landmark to its closest surface point; one farther than
@@ -71,6 +72,9 @@ pub struct DeriveOptions {
     pub max_crossing_gap_mm: f64,
     /// How far below the armpit landmarks the chest girth is taken, mm. Default 25.
     pub chest_below_armpit_mm: f64,
+    /// Vertices closer than this are merged before slicing (scans often
+    /// arrive split along UV or normal seams), mm. Default 0.01.
+    pub weld_tolerance_mm: f64,
     /// How far a path continues past its first and last landmark, mm, so
     /// that a girth plane passing just beyond an end still crosses it.
     /// Default 30.
@@ -89,6 +93,7 @@ impl Default for DeriveOptions {
             max_crossing_gap_mm: 5.0,
             chest_below_armpit_mm: 25.0,
             path_extension_mm: 30.0,
+            weld_tolerance_mm: 0.01,
         }
     }
 }
@@ -177,6 +182,7 @@ pub fn derive_features(
     landmarks: &Landmarks,
     opts: &DeriveOptions,
 ) -> Result<FeatureBody, FeatureError> {
+    let mesh = mesh.welded(opts.weld_tolerance_mm / MM_PER_M)?;
     let stature = mesh.aabb().size().y;
     if !(stature >= opts.min_stature_m && stature <= opts.max_stature_m) {
         return Err(FeatureError::BodySize {
