@@ -1,5 +1,6 @@
 //! `grade3d` command line: the service and the data tools.
 
+use std::io::Write;
 use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -174,13 +175,14 @@ fn fit_chart(path: &std::path::Path, figure: &str) -> Result<(), Box<dyn std::er
         size_chart::parse_csv(&text, &opts)?
     };
     let model = BodyModel::embedded()?;
+    let mut out = std::io::stdout().lock();
     for row in &chart.rows {
         let f = fit::fit_size(model, row, &fit::FitOptions::default())?;
-        print!("size {:>4}:", row.size);
+        write!(out, "size {:>4}:", row.size)?;
         for (id, r) in &f.residuals {
-            print!("  {id} {:.1} cm ({:+.2} mm)", r.target_m * 100.0, r.error_mm());
+            write!(out, "  {id} {:.1} cm ({:+.2} mm)", r.target_m * 100.0, r.error_mm())?;
         }
-        println!();
+        writeln!(out)?;
     }
     Ok(())
 }
@@ -189,11 +191,13 @@ fn measure_body(body: &std::path::Path, landmarks: &std::path::Path) -> Result<(
     let mesh = grade3d::io::gltf::read_mesh(&std::fs::read(body)?, &Default::default())?;
     let lm = grade3d::io::landmarks::parse_landmarks(&std::fs::read_to_string(landmarks)?)?;
     let fb = grade3d::body::derive::derive_features(mesh, &lm, &Default::default())?;
+    let mut out = std::io::stdout().lock();
     for (id, v) in grade3d::body::measure::measure(&fb, &Default::default()) {
-        println!("{id:>18}  {:7.1} cm", v * 100.0);
+        writeln!(out, "{id:>18}  {:7.1} cm", v * 100.0)?;
     }
     for (id, p) in &fb.points {
-        println!(
+        writeln!(
+            out,
             "{id:>18}  {:+.4} {:+.4} {:+.4}  |t1.(t2xn)| {:.3}",
             p.position.x,
             p.position.y,
