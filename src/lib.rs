@@ -10,3 +10,4 @@ pub mod geom;
 pub mod io;
 pub mod mannequin;
 pub mod service;
+pub mod template;

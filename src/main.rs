@@ -55,6 +55,12 @@ enum DataCommand {
         #[arg(long, default_value = "templates/mannequin/hm08.bin.gz")]
         out: PathBuf,
     },
+    /// Rebuild the built-in garment templates (templates/garments/*.json) on the reference body.
+    Templates {
+        /// Output folder.
+        #[arg(long, default_value = "templates/garments")]
+        dir: PathBuf,
+    },
     /// Rebuild fixtures/bodies (8 bodies) and fixtures/astm (12 ASTM D5585 sizes).
     Fixtures {
         /// The fixtures folder.
@@ -107,6 +113,14 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
             );
         }
         Command::Data { what: DataCommand::Fixtures { dir } } => write_fixtures(&dir)?,
+        Command::Data { what: DataCommand::Templates { dir } } => {
+            std::fs::create_dir_all(&dir)?;
+            for t in grade3d::template::library::author_all()? {
+                let path = dir.join(format!("{}.json", t.name));
+                std::fs::write(&path, t.to_json())?;
+                println!("wrote {} ({} nodes, {} faces)", path.display(), t.nodes.len(), t.faces.len());
+            }
+        }
         Command::FitChart { chart, figure } => fit_chart(&chart, &figure)?,
         Command::Measure { body, landmarks } => measure_body(&body, &landmarks)?,
     }
@@ -203,7 +217,7 @@ fn measure_body(body: &std::path::Path, landmarks: &std::path::Path) -> Result<(
             p.position.y,
             p.position.z,
             p.frame.triple().abs()
-        );
+        )?;
     }
     Ok(())
 }

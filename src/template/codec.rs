@@ -1,0 +1,263 @@
+//! Encoding a garment mesh into a template on a reference body, and
+//! decoding a template onto any feature human model (seed 000 §3.2, §4.2).
+//!
+//! **Encode.** Each node `v̄_i` at position `p` is tied to a feature point
+//! `q_j` (the one given, else the nearest), and `(α, β, γ)` solve the 3×3
+//! system of Eq. (1):
+//!
+//! `p − p(q_j) = α n(q_j) + β t(f1) + γ t(f2)`.
+//!
+//! The plain offset `d = p − p(q_j)` of Eq. (2) is stored too, and the
+//! node's reference position (Eq. 5 needs it).
+//!
+//! **Decode.** On a body `H'`: `p'(v̄_i) = p'(q_j) + α n' + β t'(f1) + γ t'(f2)`
+//! (Eq. 1), or `p'(q_j) + d` (Eq. 2, for comparison: it does not follow
+//! the body's orientation, seed 000 Fig. 6). Profiles follow their end
+//! nodes by Eq. (5) ([`Profile::relocated`]).
+//!
+//! Failure modes: a node tied to a feature point the body lacks, a
+//! singular frame at encode time, a profile that cannot be built — each a
+//! [`CodecError`] naming the node or edge.
+
+use std::collections::BTreeMap;
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use super::format::{
+    Edge, Face, GradingDefaults, GrainLine, Node, Notch, Panel, Relocation, Seam, Template, TemplateError,
+    SCHEMA_ID, SCHEMA_VERSION,
+};
+use super::profile::{Profile, ProfileError};
+use crate::body::feature::FeatureBody;
+use crate::body::vocab::{PointId, VOCABULARY_VERSION};
+
+/// Why encoding or decoding failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum CodecError {
+    /// The body has no such feature point.
+    #[error("node {node} is tied to `{point}`, which the body does not have")]
+    MissingPoint {
+        /// The node.
+        node: u32,
+        /// The feature point.
+        point: PointId,
+    },
+    /// The frame at a feature point is singular.
+    #[error("node {node}: the frame at `{point}` is singular")]
+    SingularFrame {
+        /// The node.
+        node: u32,
+        /// The feature point.
+        point: PointId,
+    },
+    /// A profile could not be built or moved.
+    #[error("edge {edge}: {source}")]
+    Profile {
+        /// The edge.
+        edge: u32,
+        /// The cause.
+        source: ProfileError,
+    },
+    /// A draft refers to something that does not exist.
+    #[error("draft: {0}")]
+    Draft(String),
+    /// The encoded template is invalid.
+    #[error(transparent)]
+    Template(#[from] TemplateError),
+}
+
+/// A pattern piece of a draft: triangle indices into [`Draft::triangles`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DraftPanel {
+    /// Piece name.
+    pub name: String,
+    /// Its triangles.
+    pub triangles: Vec<usize>,
+    /// Grain line `(from node, to node)`.
+    pub grain: (u32, u32),
+    /// Pieces to cut.
+    pub quantity: u32,
+}
+
+/// A seam of a draft: a chain of nodes along which two panels meet.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DraftSeam {
+    /// Seam name.
+    pub name: String,
+    /// One panel.
+    pub panel_a: String,
+    /// The other.
+    pub panel_b: String,
+    /// Nodes along the seam, in order.
+    pub nodes: Vec<u32>,
+}
+
+/// A garment mesh placed on a reference body, before encoding.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Draft {
+    /// Template name.
+    pub name: String,
+    /// Template version.
+    pub version: u32,
+    /// Description.
+    pub description: String,
+    /// Ease by girth, mm.
+    pub ease_mm: BTreeMap<String, f64>,
+    /// Node positions on the reference body.
+    pub positions: Vec<DVec3>,
+    /// Feature point each node is tied to (`None`: the nearest).
+    pub ties: Vec<Option<PointId>>,
+    /// Triangles, counter-clockwise seen from outside.
+    pub triangles: Vec<[u32; 3]>,
+    /// Profiles: `(start node, end node)` → attached points from start to end.
+    pub profiles: Vec<((u32, u32), Vec<DVec3>)>,
+    /// Pattern pieces.
+    pub panels: Vec<DraftPanel>,
+    /// Seams.
+    pub seams: Vec<DraftSeam>,
+    /// Notches `(name, node)`.
+    pub notches: Vec<(String, u32)>,
+    /// Default grading options.
+    pub defaults: GradingDefaults,
+}
+
+/// Encodes a draft on its reference body into a template.
+pub fn encode(draft: &Draft, body: &FeatureBody) -> Result<Template, CodecError> {
+    let mut nodes = Vec::with_capacity(draft.positions.len());
+    for (i, &p) in draft.positions.iter().enumerate() {
+        let node = i as u32;
+        let tie = match draft.ties.get(i).copied().flatten() {
+            Some(t) => t,
+            None => body
+                .points
+                .iter()
+                .min_by(|a, b| a.1.position.distance(p).total_cmp(&b.1.position.distance(p)))
+                .map(|(k, _)| *k)
+                .ok_or_else(|| CodecError::Draft("the reference body has no feature points".into()))?,
+        };
+        let q = body.points.get(&tie).ok_or(CodecError::MissingPoint { node, point: tie })?;
+        let d = p - q.position;
+        let (alpha, beta, gamma) = q.frame.coordinates(d).ok_or(CodecError::SingularFrame { node, point: tie })?;
+        nodes.push(Node { point: tie, alpha, beta, gamma, offset: d.to_array(), reference: p.to_array() });
+    }
+    // edge table: one row per undirected edge, start < end
+    let mut edge_ids: BTreeMap<(u32, u32), u32> = BTreeMap::new();
+    let mut edges: Vec<Edge> = Vec::new();
+    let mut faces = Vec::with_capacity(draft.triangles.len());
+    for t in &draft.triangles {
+        let mut fe = [0u32; 3];
+        let mut fd = [0i8; 3];
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            if a as usize >= nodes.len() || b as usize >= nodes.len() {
+                return Err(CodecError::Draft(format!("triangle {t:?} names a missing node")));
+            }
+            let key = (a.min(b), a.max(b));
+            let id = *edge_ids.entry(key).or_insert_with(|| {
+                edges.push(Edge { start: key.0, end: key.1, profile: Vec::new() });
+                (edges.len() - 1) as u32
+            });
+            fe[k] = id;
+            fd[k] = if a < b { 1 } else { -1 };
+        }
+        faces.push(Face { edges: fe, directions: fd });
+    }
+    for ((a, b), pts) in &draft.profiles {
+        let key = ((*a).min(*b), (*a).max(*b));
+        let id = *edge_ids.get(&key).ok_or_else(|| CodecError::Draft(format!("profile on missing edge {a}–{b}")))?;
+        let mut pts = pts.clone();
+        if a > b {
+            pts.reverse();
+        }
+        // the profile interpolates its end nodes exactly
+        if let Some(first) = pts.first_mut() {
+            *first = draft.positions[key.0 as usize];
+        }
+        if let Some(last) = pts.last_mut() {
+            *last = draft.positions[key.1 as usize];
+        }
+        Profile::new(pts.clone()).map_err(|source| CodecError::Profile { edge: id, source })?;
+        edges[id as usize].profile = pts.iter().map(|p| p.to_array()).collect();
+    }
+    let panels = draft
+        .panels
+        .iter()
+        .map(|p| Panel {
+            name: p.name.clone(),
+            faces: p.triangles.iter().map(|&t| t as u32).collect(),
+            grain: GrainLine { from: p.grain.0, to: p.grain.1 },
+            quantity: p.quantity,
+        })
+        .collect();
+    let mut seams = Vec::new();
+    for s in &draft.seams {
+        let mut es = Vec::new();
+        for w in s.nodes.windows(2) {
+            let key = (w[0].min(w[1]), w[0].max(w[1]));
+            es.push(*edge_ids.get(&key).ok_or_else(|| {
+                CodecError::Draft(format!("seam `{}` runs along missing edge {}–{}", s.name, w[0], w[1]))
+            })?);
+        }
+        seams.push(Seam { name: s.name.clone(), panel_a: s.panel_a.clone(), panel_b: s.panel_b.clone(), edges: es });
+    }
+    let t = Template {
+        schema: SCHEMA_ID.to_owned(),
+        schema_version: SCHEMA_VERSION,
+        vocabulary: VOCABULARY_VERSION,
+        name: draft.name.clone(),
+        version: draft.version,
+        description: draft.description.clone(),
+        ease_mm: draft.ease_mm.clone(),
+        nodes,
+        edges,
+        faces,
+        panels,
+        seams,
+        notches: draft.notches.iter().map(|(n, v)| Notch { name: n.clone(), node: *v }).collect(),
+        defaults: draft.defaults.clone(),
+    };
+    t.validate()?;
+    Ok(t)
+}
+
+/// The coarse garment mesh `M0` of a template on a body.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CoarseMesh {
+    /// Node positions.
+    pub positions: Vec<DVec3>,
+    /// Triangles (node indices), counter-clockwise seen from outside.
+    pub triangles: Vec<[u32; 3]>,
+    /// The profile of every edge of the template's edge table, if any,
+    /// oriented from the edge's start node to its end node.
+    pub profiles: Vec<Option<Profile>>,
+}
+
+/// Decodes a template onto a feature human model.
+pub fn decode(t: &Template, body: &FeatureBody, relocation: Relocation) -> Result<CoarseMesh, CodecError> {
+    let mut positions = Vec::with_capacity(t.nodes.len());
+    for (i, n) in t.nodes.iter().enumerate() {
+        let q = body.points.get(&n.point).ok_or(CodecError::MissingPoint { node: i as u32, point: n.point })?;
+        let p = match relocation {
+            Relocation::Eq1Frame => q.position + q.frame.offset(n.alpha, n.beta, n.gamma),
+            Relocation::Eq2Offset => q.position + DVec3::from_array(n.offset),
+        };
+        positions.push(p);
+    }
+    let triangles = (0..t.faces.len()).map(|f| t.face_nodes(f)).collect();
+    let mut profiles = Vec::with_capacity(t.edges.len());
+    for (i, e) in t.edges.iter().enumerate() {
+        if e.profile.is_empty() {
+            profiles.push(None);
+            continue;
+        }
+        let edge = i as u32;
+        let old = Profile::new(e.profile.iter().map(|&p| DVec3::from_array(p)).collect())
+            .map_err(|source| CodecError::Profile { edge, source })?;
+        let moved = old
+            .relocated(positions[e.start as usize], positions[e.end as usize])
+            .map_err(|source| CodecError::Profile { edge, source })?;
+        profiles.push(Some(moved));
+    }
+    Ok(CoarseMesh { positions, triangles, profiles })
+}

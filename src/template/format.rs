@@ -1,0 +1,632 @@
+//! The garment feature template document (seed 000 §3, Table 1) and its
+//! validation.
+//!
+//! A template is a coarse triangle mesh `M^f = (K^f, V^f)` whose nodes are
+//! tied to feature points of the body:
+//! * **nodes** — `(j, α, β, γ)` of seed 000 Eq. (1), plus the plain offset
+//!   `d` of Eq. (2) (kept for comparison) and the node's position on the
+//!   reference body (needed by Eq. (5) to move profiles);
+//! * **edge table** — start node, end node, attached profile points
+//!   (absolute coordinates on the reference body, as the paper stores them);
+//! * **face table** — three edges and their directions (+1 when the face
+//!   runs the edge from its start to its end node, −1 otherwise);
+//! * **panels** (faces of each pattern piece, grain line, quantity),
+//!   **seams** (edge chains sewn together), **notches**, ease and default
+//!   grading options.
+//!
+//! [`Template::validate`] checks everything a decoder relies on and names
+//! the offending element: unknown feature IDs, dangling references,
+//! face edges that do not form a directed triangle, edges shared by more
+//! than two faces or used twice in the same direction, non-finite
+//! numbers, and schema versions from the future.
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use serde::{Deserialize, Serialize};
+
+use crate::body::vocab::{PointId, VOCABULARY_VERSION};
+
+/// Version of the template schema this build reads and writes.
+pub const SCHEMA_VERSION: u32 = 1;
+
+/// Identifier of the schema (the `schema` field).
+pub const SCHEMA_ID: &str = "grade3d/garment-template";
+
+/// A node of the template (seed 000 Eq. 1).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Node {
+    /// Feature point `q_j` the node is tied to.
+    pub point: PointId,
+    /// Offset along the surface normal `n(q_j)`, m.
+    pub alpha: f64,
+    /// Offset along `t(f1)`, m.
+    pub beta: f64,
+    /// Offset along `t(f2)`, m.
+    pub gamma: f64,
+    /// Eq. (2) offset `d`, m (world axes of the reference body).
+    pub offset: [f64; 3],
+    /// Position on the reference body, m.
+    pub reference: [f64; 3],
+}
+
+/// A row of the edge table.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Edge {
+    /// Start node index.
+    pub start: u32,
+    /// End node index.
+    pub end: u32,
+    /// Attached profile points `Q_0..Q_{n−1}` on the reference body, m;
+    /// empty when the edge has no profile. `Q_0` is the start node and
+    /// `Q_{n−1}` the end node.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub profile: Vec<[f64; 3]>,
+}
+
+/// A row of the face table.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Face {
+    /// The three edges, in counter-clockwise order seen from outside.
+    pub edges: [u32; 3],
+    /// +1 where the face runs the edge start → end, −1 otherwise.
+    pub directions: [i8; 3],
+}
+
+/// A grain line: from one node towards another (on the reference body).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GrainLine {
+    /// Node at the start of the grain arrow.
+    pub from: u32,
+    /// Node at its end.
+    pub to: u32,
+}
+
+/// A pattern piece.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Panel {
+    /// Piece name (unique).
+    pub name: String,
+    /// Faces of the piece.
+    pub faces: Vec<u32>,
+    /// Grain line.
+    pub grain: GrainLine,
+    /// Pieces to cut.
+    pub quantity: u32,
+}
+
+/// Two edge chains sewn together.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Seam {
+    /// Seam name (unique).
+    pub name: String,
+    /// First side: panel name.
+    pub panel_a: String,
+    /// Second side: panel name.
+    pub panel_b: String,
+    /// The edges along the seam, in order.
+    pub edges: Vec<u32>,
+}
+
+/// A notch on an edge.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Notch {
+    /// What the notch marks (e.g. `hip`).
+    pub name: String,
+    /// The node it sits at.
+    pub node: u32,
+}
+
+/// Which relocation equation a decode uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Relocation {
+    /// Seed 000 Eq. (1): offsets in the local frame (default).
+    #[default]
+    Eq1Frame,
+    /// Seed 000 Eq. (2): plain world offsets (for comparison only).
+    Eq2Offset,
+}
+
+/// Default grading options stored with a template.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct GradingDefaults {
+    /// Subdivision levels. Default 3.
+    pub levels: u32,
+    /// Clearance kept between garment and body, mm. Default 3.
+    pub clearance_mm: f64,
+    /// Seam allowance of the pattern pieces, mm. Default 10.
+    pub seam_allowance_mm: f64,
+    /// Relocation equation. Default Eq. (1).
+    pub relocation: Relocation,
+}
+
+impl Default for GradingDefaults {
+    fn default() -> Self {
+        Self { levels: 3, clearance_mm: 3.0, seam_allowance_mm: 10.0, relocation: Relocation::Eq1Frame }
+    }
+}
+
+/// A garment feature template document.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Template {
+    /// Always [`SCHEMA_ID`].
+    pub schema: String,
+    /// Schema version ([`SCHEMA_VERSION`]).
+    pub schema_version: u32,
+    /// Feature vocabulary version the node IDs belong to.
+    pub vocabulary: u32,
+    /// Template name (a slug).
+    pub name: String,
+    /// Template version (increases with every change).
+    pub version: u32,
+    /// Human description.
+    #[serde(default)]
+    pub description: String,
+    /// Ease at each girth the style defines, mm (garment girth − body girth).
+    #[serde(default)]
+    pub ease_mm: BTreeMap<String, f64>,
+    /// Nodes `V^f`.
+    pub nodes: Vec<Node>,
+    /// Edge table.
+    pub edges: Vec<Edge>,
+    /// Face table.
+    pub faces: Vec<Face>,
+    /// Pattern pieces.
+    pub panels: Vec<Panel>,
+    /// Seams.
+    #[serde(default)]
+    pub seams: Vec<Seam>,
+    /// Notches.
+    #[serde(default)]
+    pub notches: Vec<Notch>,
+    /// Default grading options.
+    #[serde(default)]
+    pub defaults: GradingDefaults,
+}
+
+/// What is wrong with a template.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum TemplateError {
+    /// Not parseable (syntax, wrong types, unknown fields, unknown feature ID).
+    #[error("template JSON: {0}")]
+    Syntax(String),
+    /// The document violates the JSON Schema (`templates/schema/`).
+    #[error("template does not match its JSON Schema: {0}")]
+    Schema(String),
+    /// Not a template document.
+    #[error("`schema` is `{0}`, expected `{SCHEMA_ID}`")]
+    NotATemplate(String),
+    /// Written by a newer schema.
+    #[error("schema version {found} is newer than this service's {supported}")]
+    FutureSchema {
+        /// Version in the document.
+        found: u32,
+        /// Newest supported.
+        supported: u32,
+    },
+    /// Written against a newer feature vocabulary.
+    #[error("vocabulary version {found} is newer than this service's {supported}")]
+    FutureVocabulary {
+        /// Version in the document.
+        found: u32,
+        /// Newest supported.
+        supported: u32,
+    },
+    /// Empty name or no nodes/faces.
+    #[error("template is empty: {0}")]
+    Empty(&'static str),
+    /// A non-finite number.
+    #[error("{element} has a non-finite number")]
+    NonFinite {
+        /// Which element (`node 3`, `edge 7 profile`, …).
+        element: String,
+    },
+    /// An edge names a node that does not exist, or the same node twice.
+    #[error("edge {edge}: {reason}")]
+    BadEdge {
+        /// The edge.
+        edge: u32,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A face names an edge that does not exist.
+    #[error("face {face} names edge {edge}, which does not exist")]
+    MissingEdge {
+        /// The face.
+        face: u32,
+        /// The edge it names.
+        edge: u32,
+    },
+    /// A face's edges and directions do not form a directed triangle.
+    #[error("face {face}: edges and directions do not form a directed triangle")]
+    InconsistentDirections {
+        /// The face.
+        face: u32,
+    },
+    /// An edge used by more than two faces.
+    #[error("edge {edge} is shared by {faces} faces (non-manifold)")]
+    NonManifoldEdge {
+        /// The edge.
+        edge: u32,
+        /// How many faces use it.
+        faces: usize,
+    },
+    /// Two faces run an edge in the same direction.
+    #[error("edge {edge} is run in the same direction by faces {face_a} and {face_b} (inconsistent orientation)")]
+    InconsistentOrientation {
+        /// The edge.
+        edge: u32,
+        /// First face.
+        face_a: u32,
+        /// Second face.
+        face_b: u32,
+    },
+    /// A panel, seam, notch or grain line refers to something missing.
+    #[error("{element}: {reason}")]
+    BadReference {
+        /// Which element.
+        element: String,
+        /// What is wrong.
+        reason: String,
+    },
+}
+
+/// The JSON Schema of the template document.
+pub const SCHEMA_JSON: &str = include_str!("../../templates/schema/garment-template.schema.json");
+
+/// Checks a parsed document against [`SCHEMA_JSON`]; the error lists the
+/// first few violations with their JSON pointers.
+pub fn check_schema(doc: &serde_json::Value) -> Result<(), TemplateError> {
+    static VALIDATOR: std::sync::OnceLock<Result<jsonschema::Validator, String>> = std::sync::OnceLock::new();
+    let v = VALIDATOR
+        .get_or_init(|| {
+            let schema: serde_json::Value = serde_json::from_str(SCHEMA_JSON).map_err(|e| e.to_string())?;
+            jsonschema::validator_for(&schema).map_err(|e| e.to_string())
+        })
+        .as_ref()
+        .map_err(|e| TemplateError::Schema(format!("the schema itself is invalid: {e}")))?;
+    let errors: Vec<String> =
+        v.iter_errors(doc).take(5).map(|e| format!("{} (at `{}`)", e, e.instance_path())).collect();
+    if errors.is_empty() {
+        Ok(())
+    } else {
+        Err(TemplateError::Schema(errors.join("; ")))
+    }
+}
+
+fn finite3(a: &[f64; 3]) -> bool {
+    a.iter().all(|x| x.is_finite())
+}
+
+impl Template {
+    /// Parses and validates a template document.
+    pub fn from_json(text: &str) -> Result<Self, TemplateError> {
+        // Read the version fields first so that a future document gets the
+        // right error even if its body does not parse with this schema.
+        #[derive(Deserialize)]
+        struct Head {
+            schema: Option<String>,
+            schema_version: Option<u32>,
+            vocabulary: Option<u32>,
+        }
+        let head: Head = serde_json::from_str(text).map_err(|e| TemplateError::Syntax(e.to_string()))?;
+        if let Some(s) = &head.schema {
+            if s != SCHEMA_ID {
+                return Err(TemplateError::NotATemplate(s.clone()));
+            }
+        }
+        if let Some(v) = head.schema_version.filter(|&v| v > SCHEMA_VERSION) {
+            return Err(TemplateError::FutureSchema { found: v, supported: SCHEMA_VERSION });
+        }
+        if let Some(v) = head.vocabulary.filter(|&v| v > VOCABULARY_VERSION) {
+            return Err(TemplateError::FutureVocabulary { found: v, supported: VOCABULARY_VERSION });
+        }
+        let value: serde_json::Value = serde_json::from_str(text).map_err(|e| TemplateError::Syntax(e.to_string()))?;
+        check_schema(&value)?;
+        let t: Template = serde_json::from_value(value).map_err(|e| TemplateError::Syntax(e.to_string()))?;
+        t.validate()?;
+        Ok(t)
+    }
+
+    /// Serialises (pretty JSON, stable order).
+    pub fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).unwrap_or_default() + "\n"
+    }
+
+    /// The three node indices of a face, in its orientation.
+    pub fn face_nodes(&self, f: usize) -> [u32; 3] {
+        let face = &self.faces[f];
+        let tail = |k: usize| {
+            let e = &self.edges[face.edges[k] as usize];
+            if face.directions[k] > 0 {
+                e.start
+            } else {
+                e.end
+            }
+        };
+        [tail(0), tail(1), tail(2)]
+    }
+
+    /// Checks every invariant a decoder relies on.
+    pub fn validate(&self) -> Result<(), TemplateError> {
+        if self.schema != SCHEMA_ID {
+            return Err(TemplateError::NotATemplate(self.schema.clone()));
+        }
+        if self.schema_version > SCHEMA_VERSION {
+            return Err(TemplateError::FutureSchema { found: self.schema_version, supported: SCHEMA_VERSION });
+        }
+        if self.vocabulary > VOCABULARY_VERSION {
+            return Err(TemplateError::FutureVocabulary { found: self.vocabulary, supported: VOCABULARY_VERSION });
+        }
+        if self.name.trim().is_empty() {
+            return Err(TemplateError::Empty("no name"));
+        }
+        if self.nodes.is_empty() || self.faces.is_empty() {
+            return Err(TemplateError::Empty("no nodes or no faces"));
+        }
+        for (i, n) in self.nodes.iter().enumerate() {
+            if ![n.alpha, n.beta, n.gamma].iter().all(|x| x.is_finite()) || !finite3(&n.offset) || !finite3(&n.reference)
+            {
+                return Err(TemplateError::NonFinite { element: format!("node {i}") });
+            }
+        }
+        let nn = self.nodes.len() as u32;
+        for (i, e) in self.edges.iter().enumerate() {
+            let edge = i as u32;
+            if e.start >= nn || e.end >= nn {
+                return Err(TemplateError::BadEdge { edge, reason: format!("node out of range ({} nodes)", nn) });
+            }
+            if e.start == e.end {
+                return Err(TemplateError::BadEdge { edge, reason: "starts and ends at the same node".into() });
+            }
+            if !e.profile.iter().all(finite3) {
+                return Err(TemplateError::NonFinite { element: format!("edge {i} profile") });
+            }
+            if e.profile.len() == 1 {
+                return Err(TemplateError::BadEdge { edge, reason: "a profile needs at least two points".into() });
+            }
+        }
+        // faces: edges exist, form a directed triangle; edge use counts
+        let mut uses: BTreeMap<u32, Vec<(u32, i8)>> = BTreeMap::new();
+        for (f, face) in self.faces.iter().enumerate() {
+            let fid = f as u32;
+            for &e in &face.edges {
+                if e as usize >= self.edges.len() {
+                    return Err(TemplateError::MissingEdge { face: fid, edge: e });
+                }
+            }
+            if face.directions.iter().any(|&d| d != 1 && d != -1) {
+                return Err(TemplateError::InconsistentDirections { face: fid });
+            }
+            let ends = |k: usize| {
+                let e = &self.edges[face.edges[k] as usize];
+                if face.directions[k] > 0 {
+                    (e.start, e.end)
+                } else {
+                    (e.end, e.start)
+                }
+            };
+            let (a, b, c) = (ends(0), ends(1), ends(2));
+            if a.1 != b.0 || b.1 != c.0 || c.1 != a.0 || a.0 == b.0 || b.0 == c.0 || a.0 == c.0 {
+                return Err(TemplateError::InconsistentDirections { face: fid });
+            }
+            for k in 0..3 {
+                uses.entry(face.edges[k]).or_default().push((fid, face.directions[k]));
+            }
+        }
+        for (&edge, u) in &uses {
+            if u.len() > 2 {
+                return Err(TemplateError::NonManifoldEdge { edge, faces: u.len() });
+            }
+            if u.len() == 2 && u[0].1 == u[1].1 {
+                return Err(TemplateError::InconsistentOrientation { edge, face_a: u[0].0, face_b: u[1].0 });
+            }
+        }
+        // panels
+        let mut names = BTreeSet::new();
+        let mut owner: BTreeMap<u32, &str> = BTreeMap::new();
+        for p in &self.panels {
+            if !names.insert(p.name.as_str()) {
+                return Err(TemplateError::BadReference {
+                    element: format!("panel `{}`", p.name),
+                    reason: "duplicate name".into(),
+                });
+            }
+            for &f in &p.faces {
+                if f as usize >= self.faces.len() {
+                    return Err(TemplateError::BadReference {
+                        element: format!("panel `{}`", p.name),
+                        reason: format!("face {f} does not exist"),
+                    });
+                }
+                if let Some(other) = owner.insert(f, &p.name) {
+                    return Err(TemplateError::BadReference {
+                        element: format!("panel `{}`", p.name),
+                        reason: format!("face {f} also belongs to panel `{other}`"),
+                    });
+                }
+            }
+            if p.grain.from >= nn || p.grain.to >= nn || p.grain.from == p.grain.to {
+                return Err(TemplateError::BadReference {
+                    element: format!("panel `{}` grain line", p.name),
+                    reason: "needs two distinct existing nodes".into(),
+                });
+            }
+        }
+        if let Some(f) = (0..self.faces.len() as u32).find(|f| !owner.contains_key(f)) {
+            return Err(TemplateError::BadReference {
+                element: format!("face {f}"),
+                reason: "belongs to no panel".into(),
+            });
+        }
+        for s in &self.seams {
+            for side in [&s.panel_a, &s.panel_b] {
+                if !names.contains(side.as_str()) {
+                    return Err(TemplateError::BadReference {
+                        element: format!("seam `{}`", s.name),
+                        reason: format!("panel `{side}` does not exist"),
+                    });
+                }
+            }
+            if s.edges.is_empty() {
+                return Err(TemplateError::BadReference {
+                    element: format!("seam `{}`", s.name),
+                    reason: "has no edges".into(),
+                });
+            }
+            for &e in &s.edges {
+                if e as usize >= self.edges.len() {
+                    return Err(TemplateError::BadReference {
+                        element: format!("seam `{}`", s.name),
+                        reason: format!("edge {e} does not exist"),
+                    });
+                }
+            }
+        }
+        for n in &self.notches {
+            if n.node >= nn {
+                return Err(TemplateError::BadReference {
+                    element: format!("notch `{}`", n.name),
+                    reason: format!("node {} does not exist", n.node),
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A one-triangle template, valid.
+    fn tiny() -> Template {
+        let node = |p: PointId, r: [f64; 3]| Node { point: p, alpha: 0.01, beta: 0.0, gamma: 0.0, offset: [0.0; 3], reference: r };
+        Template {
+            schema: SCHEMA_ID.into(),
+            schema_version: SCHEMA_VERSION,
+            vocabulary: VOCABULARY_VERSION,
+            name: "tiny".into(),
+            version: 1,
+            description: String::new(),
+            ease_mm: BTreeMap::new(),
+            nodes: vec![
+                node(PointId::WaistFront, [0.0, 0.0, 0.1]),
+                node(PointId::WaistLeft, [0.1, 0.0, 0.0]),
+                node(PointId::HipFront, [0.0, -0.2, 0.1]),
+            ],
+            edges: vec![
+                Edge { start: 0, end: 1, profile: vec![] },
+                Edge { start: 1, end: 2, profile: vec![] },
+                Edge { start: 0, end: 2, profile: vec![] },
+            ],
+            faces: vec![Face { edges: [0, 1, 2], directions: [1, 1, -1] }],
+            panels: vec![Panel { name: "front".into(), faces: vec![0], grain: GrainLine { from: 0, to: 2 }, quantity: 1 }],
+            seams: vec![],
+            notches: vec![],
+            defaults: GradingDefaults::default(),
+        }
+    }
+
+    #[test]
+    fn tiny_round_trips_and_matches_the_schema() {
+        let t = tiny();
+        t.validate().unwrap();
+        let back = Template::from_json(&t.to_json()).unwrap();
+        assert_eq!(back, t);
+        assert_eq!(t.face_nodes(0), [0, 1, 2]);
+    }
+
+    #[test]
+    fn unknown_feature_id_is_named() {
+        let text = tiny().to_json().replace("\"waist_left\"", "\"waist_middle\"");
+        let e = Template::from_json(&text).unwrap_err();
+        assert!(e.to_string().contains("waist_middle"), "{e}");
+    }
+
+    #[test]
+    fn face_naming_a_missing_edge() {
+        let mut t = tiny();
+        t.faces[0].edges[2] = 9;
+        assert_eq!(t.validate(), Err(TemplateError::MissingEdge { face: 0, edge: 9 }));
+    }
+
+    #[test]
+    fn inconsistent_edge_directions() {
+        let mut t = tiny();
+        t.faces[0].directions = [1, 1, 1];
+        assert_eq!(t.validate(), Err(TemplateError::InconsistentDirections { face: 0 }));
+    }
+
+    #[test]
+    fn non_manifold_edge() {
+        let mut t = tiny();
+        for _ in 0..2 {
+            t.nodes.push(t.nodes[2].clone());
+        }
+        // two more triangles on edge 0 (nodes 0–1)
+        t.edges.push(Edge { start: 1, end: 3, profile: vec![] }); // 3
+        t.edges.push(Edge { start: 0, end: 3, profile: vec![] }); // 4
+        t.edges.push(Edge { start: 1, end: 4, profile: vec![] }); // 5
+        t.edges.push(Edge { start: 0, end: 4, profile: vec![] }); // 6
+        t.faces.push(Face { edges: [0, 4, 3], directions: [-1, 1, -1] });
+        t.faces.push(Face { edges: [0, 6, 5], directions: [-1, 1, -1] });
+        t.panels[0].faces = vec![0, 1, 2];
+        assert_eq!(t.validate(), Err(TemplateError::NonManifoldEdge { edge: 0, faces: 3 }));
+    }
+
+    #[test]
+    fn same_direction_twice_is_inconsistent_orientation() {
+        let mut t = tiny();
+        t.nodes.push(t.nodes[2].clone());
+        t.edges.push(Edge { start: 1, end: 3, profile: vec![] });
+        t.edges.push(Edge { start: 0, end: 3, profile: vec![] });
+        t.faces.push(Face { edges: [0, 3, 4], directions: [1, 1, -1] });
+        t.panels[0].faces = vec![0, 1];
+        assert_eq!(t.validate(), Err(TemplateError::InconsistentOrientation { edge: 0, face_a: 0, face_b: 1 }));
+    }
+
+    #[test]
+    fn non_finite_numbers() {
+        let mut t = tiny();
+        t.nodes[1].beta = f64::NAN;
+        assert_eq!(t.validate(), Err(TemplateError::NonFinite { element: "node 1".into() }));
+        let mut t = tiny();
+        t.edges[0].profile = vec![[0.0, 0.0, 0.1], [0.05, f64::INFINITY, 0.05], [0.1, 0.0, 0.0]];
+        assert_eq!(t.validate(), Err(TemplateError::NonFinite { element: "edge 0 profile".into() }));
+        // JSON cannot carry NaN; an overflowing literal is refused at parse time
+        let text = tiny().to_json().replace("\"alpha\": 0.01", "\"alpha\": 1e999");
+        assert!(matches!(Template::from_json(&text), Err(TemplateError::Syntax(_))));
+    }
+
+    #[test]
+    fn schema_version_from_the_future() {
+        let text = tiny().to_json().replace("\"schema_version\": 1", "\"schema_version\": 7");
+        assert_eq!(Template::from_json(&text), Err(TemplateError::FutureSchema { found: 7, supported: SCHEMA_VERSION }));
+    }
+
+    #[test]
+    fn schema_catches_unknown_fields() {
+        let text = tiny().to_json().replacen("\"name\": \"tiny\"", "\"name\": \"tiny\", \"colour\": \"red\"", 1);
+        assert!(matches!(Template::from_json(&text), Err(TemplateError::Schema(_))));
+    }
+
+    #[test]
+    fn dangling_panel_and_seam_references() {
+        let mut t = tiny();
+        t.seams.push(Seam { name: "s".into(), panel_a: "front".into(), panel_b: "back".into(), edges: vec![0] });
+        assert!(matches!(t.validate(), Err(TemplateError::BadReference { .. })));
+        let mut t = tiny();
+        t.panels[0].faces.clear();
+        assert!(matches!(t.validate(), Err(TemplateError::BadReference { .. })));
+    }
+}
