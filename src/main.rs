@@ -61,6 +61,15 @@ enum DataCommand {
         #[arg(long, default_value = "templates/garments")]
         dir: PathBuf,
     },
+    /// Extract MakeHuman's dense garment surfaces (helper-skirt, helper-tights) into fixtures/garments.
+    Garments {
+        /// The MakeHuman hm08 folder.
+        #[arg(long, default_value = "../shared/makehuman")]
+        makehuman: PathBuf,
+        /// Output folder.
+        #[arg(long, default_value = "fixtures/garments")]
+        dir: PathBuf,
+    },
     /// Rebuild fixtures/bodies (8 bodies) and fixtures/astm (12 ASTM D5585 sizes).
     Fixtures {
         /// The fixtures folder.
@@ -119,6 +128,23 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
                 let path = dir.join(format!("{}.json", t.name));
                 std::fs::write(&path, t.to_json())?;
                 println!("wrote {} ({} nodes, {} faces)", path.display(), t.nodes.len(), t.faces.len());
+            }
+        }
+        Command::Data { what: DataCommand::Garments { makehuman, dir } } => {
+            std::fs::create_dir_all(&dir)?;
+            for group in ["helper-skirt", "helper-tights"] {
+                let (pos, tris) = grade3d::mannequin::data::obj_group(&makehuman, group)?;
+                let raw: Vec<[u64; 3]> = tris.iter().map(|t| t.map(u64::from)).collect();
+                let mesh = grade3d::geom::mesh::TriMesh::from_raw(pos, &raw)?;
+                let glb = grade3d::io::gltf::write_glb(&mesh, None, &[], "grade3d fixtures (MakeHuman hm08, CC0)")?;
+                let path = dir.join(format!("{group}.glb"));
+                std::fs::write(&path, glb)?;
+                println!(
+                    "wrote {} ({} vertices, {} triangles)",
+                    path.display(),
+                    mesh.vertex_count(),
+                    mesh.face_count()
+                );
             }
         }
         Command::FitChart { chart, figure } => fit_chart(&chart, &figure)?,

@@ -2,7 +2,6 @@
 //! scan path on a re-meshed body, and bad input.
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 use grade3d::body::derive::{derive_features, DeriveOptions, FeatureError, Landmarks};
@@ -12,39 +11,13 @@ use grade3d::body::vocab::{CurveId, PointId};
 use grade3d::geom::mesh::{MeshError, TriMesh};
 use grade3d::geom::polyline::Polyline;
 use grade3d::geom::simplify::{remesh_unrelated, SimplifyOptions};
-use grade3d::io::gltf::{read_mesh, GltfReadOptions};
-use grade3d::io::landmarks::parse_landmarks;
 use grade3d::mannequin::fit::{fit_size, FitOptions};
 use grade3d::mannequin::model::BodyModel;
 use grade3d::mannequin::size_chart::{parse_csv, FigureType, SizeChartError, SizeChartOptions};
 use proptest::prelude::*;
 
-fn fixtures() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures")
-}
-
-/// Every fixture body: (name, mesh, landmarks).
-fn fixture_bodies() -> Vec<(String, TriMesh, Landmarks)> {
-    let mut out = Vec::new();
-    for sub in ["bodies", "astm"] {
-        let dir = fixtures().join(sub);
-        let mut names: Vec<String> = std::fs::read_dir(&dir)
-            .unwrap()
-            .filter_map(|e| e.ok()?.file_name().into_string().ok())
-            .filter_map(|n| n.strip_suffix(".glb").map(str::to_owned))
-            .collect();
-        names.sort();
-        for n in names {
-            let mesh =
-                read_mesh(&std::fs::read(dir.join(format!("{n}.glb"))).unwrap(), &GltfReadOptions::default()).unwrap();
-            let lm =
-                parse_landmarks(&std::fs::read_to_string(dir.join(format!("{n}.landmarks.json"))).unwrap()).unwrap();
-            out.push((format!("{sub}/{n}"), mesh, lm));
-        }
-    }
-    assert!(out.len() >= 20, "expected 8 bodies and 12 sizes, found {}", out.len());
-    out
-}
+mod common;
+use common::{fixture_bodies, fixtures};
 
 fn derive(mesh: TriMesh, lm: &Landmarks) -> FeatureBody {
     derive_features(mesh, lm, &DeriveOptions::default()).unwrap()

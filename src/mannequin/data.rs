@@ -366,3 +366,57 @@ pub fn from_makehuman(dir: &Path) -> Result<Hm08Data, DataError> {
     }
     Ok(Hm08Data { positions, triangles, mirror, rings, targets })
 }
+
+/// One face group of `base.obj` (e.g. `helper-skirt`) as a compact
+/// triangle mesh in metres: its vertices renumbered in first-use order,
+/// quads split along their first diagonal. Generator only.
+pub fn obj_group(dir: &Path, group: &str) -> Result<(Vec<glam::DVec3>, Vec<[u32; 3]>), DataError> {
+    let obj = read_text(&dir.join("base.obj"))?;
+    let mut all = Vec::new();
+    let mut current = String::new();
+    let mut remap: BTreeMap<usize, u32> = BTreeMap::new();
+    let mut order = Vec::new();
+    let mut tris = Vec::new();
+    for line in obj.lines() {
+        let mut it = line.split_whitespace();
+        match it.next() {
+            Some("v") => {
+                let c: Vec<f64> = it.take(3).filter_map(|s| s.parse().ok()).collect();
+                if c.len() != 3 {
+                    return Err(malformed("base.obj", format!("bad vertex line `{line}`")));
+                }
+                all.push(glam::DVec3::new(c[0], c[1], c[2]) * 0.1);
+            }
+            Some("g") => current = it.next().unwrap_or("").to_owned(),
+            Some("f") if current == group => {
+                let ids: Vec<usize> = it
+                    .filter_map(|s| s.split('/').next()?.parse::<usize>().ok())
+                    .map(|i| i.saturating_sub(1))
+                    .collect();
+                if ids.len() < 3 {
+                    return Err(malformed("base.obj", format!("bad face `{line}`")));
+                }
+                let mut local = Vec::with_capacity(ids.len());
+                for i in ids {
+                    let next = remap.len() as u32;
+                    local.push(*remap.entry(i).or_insert_with(|| {
+                        order.push(i);
+                        next
+                    }));
+                }
+                for k in 1..local.len() - 1 {
+                    tris.push([local[0], local[k], local[k + 1]]);
+                }
+            }
+            _ => {}
+        }
+    }
+    if tris.is_empty() {
+        return Err(malformed("base.obj", format!("no faces in group `{group}`")));
+    }
+    let mut positions = Vec::with_capacity(order.len());
+    for i in order {
+        positions.push(*all.get(i).ok_or_else(|| malformed("base.obj", format!("face refers to vertex {i}")))?);
+    }
+    Ok((positions, tris))
+}

@@ -25,8 +25,8 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use super::format::{
-    Edge, Face, GradingDefaults, GrainLine, Node, Notch, Panel, Relocation, Seam, Template, TemplateError,
-    SCHEMA_ID, SCHEMA_VERSION,
+    Edge, Face, GradingDefaults, GrainLine, Node, Notch, Panel, Relocation, Seam, Template, TemplateError, SCHEMA_ID,
+    SCHEMA_VERSION,
 };
 use super::profile::{Profile, ProfileError};
 use crate::body::feature::FeatureBody;

@@ -374,7 +374,9 @@ impl Template {
             return Err(TemplateError::Empty("no nodes or no faces"));
         }
         for (i, n) in self.nodes.iter().enumerate() {
-            if ![n.alpha, n.beta, n.gamma].iter().all(|x| x.is_finite()) || !finite3(&n.offset) || !finite3(&n.reference)
+            if ![n.alpha, n.beta, n.gamma].iter().all(|x| x.is_finite())
+                || !finite3(&n.offset)
+                || !finite3(&n.reference)
             {
                 return Err(TemplateError::NonFinite { element: format!("node {i}") });
             }
@@ -510,7 +512,14 @@ mod tests {
 
     /// A one-triangle template, valid.
     fn tiny() -> Template {
-        let node = |p: PointId, r: [f64; 3]| Node { point: p, alpha: 0.01, beta: 0.0, gamma: 0.0, offset: [0.0; 3], reference: r };
+        let node = |p: PointId, r: [f64; 3]| Node {
+            point: p,
+            alpha: 0.01,
+            beta: 0.0,
+            gamma: 0.0,
+            offset: [0.0; 3],
+            reference: r,
+        };
         Template {
             schema: SCHEMA_ID.into(),
             schema_version: SCHEMA_VERSION,
@@ -530,7 +539,12 @@ mod tests {
                 Edge { start: 0, end: 2, profile: vec![] },
             ],
             faces: vec![Face { edges: [0, 1, 2], directions: [1, 1, -1] }],
-            panels: vec![Panel { name: "front".into(), faces: vec![0], grain: GrainLine { from: 0, to: 2 }, quantity: 1 }],
+            panels: vec![Panel {
+                name: "front".into(),
+                faces: vec![0],
+                grain: GrainLine { from: 0, to: 2 },
+                quantity: 1,
+            }],
             seams: vec![],
             notches: vec![],
             defaults: GradingDefaults::default(),
@@ -611,7 +625,10 @@ mod tests {
     #[test]
     fn schema_version_from_the_future() {
         let text = tiny().to_json().replace("\"schema_version\": 1", "\"schema_version\": 7");
-        assert_eq!(Template::from_json(&text), Err(TemplateError::FutureSchema { found: 7, supported: SCHEMA_VERSION }));
+        assert_eq!(
+            Template::from_json(&text),
+            Err(TemplateError::FutureSchema { found: 7, supported: SCHEMA_VERSION })
+        );
     }
 
     #[test]

@@ -84,13 +84,7 @@ pub struct SkirtOptions {
 
 impl Default for SkirtOptions {
     fn default() -> Self {
-        Self {
-            waist_ease_mm: 10.0,
-            hip_ease_mm: 40.0,
-            length_below_hip_m: 0.35,
-            hem_flare_mm: 60.0,
-            profile_points: 7,
-        }
+        Self { waist_ease_mm: 10.0, hip_ease_mm: 40.0, length_below_hip_m: 0.35, hem_flare_mm: 60.0, profile_points: 7 }
     }
 }
 
@@ -99,7 +93,11 @@ const MM: f64 = 1e-3;
 /// Arc-length parameters of 8 ring nodes on a girth: front, front-left,
 /// left, back-left, back, back-right, right, front-right (the girth runs
 /// anticlockwise seen from above, front → left → back → right).
-fn ring_params(body: &FeatureBody, curve: CurveId, cardinal: [PointId; 4]) -> Result<(Polyline, [f64; 8]), AuthorError> {
+fn ring_params(
+    body: &FeatureBody,
+    curve: CurveId,
+    cardinal: [PointId; 4],
+) -> Result<(Polyline, [f64; 8]), AuthorError> {
     let loop_ = body.curves.get(&curve).ok_or_else(|| AuthorError::Missing(curve.to_string()))?.polyline.clone();
     let total = loop_.length();
     let mut s = [0.0; 4];
@@ -188,7 +186,12 @@ pub fn straight_skirt(body: &FeatureBody, o: &SkirtOptions) -> Result<Template, 
         profiles.push(((16 + i as u32, 16 + j as u32), hem));
     }
     // vertical profiles waist → hip along the centre and side lines
-    let columns = [(0u32, CurveId::CentreFront), (2, CurveId::SideLineLeft), (4, CurveId::CentreBack), (6, CurveId::SideLineRight)];
+    let columns = [
+        (0u32, CurveId::CentreFront),
+        (2, CurveId::SideLineLeft),
+        (4, CurveId::CentreBack),
+        (6, CurveId::SideLineRight),
+    ];
     for (col, curve) in columns {
         let line = &body.curves.get(&curve).ok_or_else(|| AuthorError::Missing(curve.to_string()))?.polyline;
         let a = body.points[&waist_ties[col as usize / 2]].position;
@@ -230,8 +233,18 @@ pub fn straight_skirt(body: &FeatureBody, o: &SkirtOptions) -> Result<Template, 
         profiles,
         panels: vec![panel("front", [6, 7, 0, 1], (0, 16)), panel("back", [2, 3, 4, 5], (4, 20))],
         seams: vec![
-            DraftSeam { name: "side_left".into(), panel_a: "front".into(), panel_b: "back".into(), nodes: vec![2, 10, 18] },
-            DraftSeam { name: "side_right".into(), panel_a: "back".into(), panel_b: "front".into(), nodes: vec![6, 14, 22] },
+            DraftSeam {
+                name: "side_left".into(),
+                panel_a: "front".into(),
+                panel_b: "back".into(),
+                nodes: vec![2, 10, 18],
+            },
+            DraftSeam {
+                name: "side_right".into(),
+                panel_a: "back".into(),
+                panel_b: "front".into(),
+                nodes: vec![6, 14, 22],
+            },
         ],
         notches: vec![("hip".into(), 10), ("hip".into(), 14)],
         defaults: GradingDefaults::default(),
