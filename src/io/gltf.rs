@@ -1458,7 +1458,9 @@ mod tests {
         let e = read(&base_with(r#""nodes":[{"mesh":0}]"#, r#""nodes":[{"mesh":0,"rotation":[0,0,0,0]}]"#));
         assert!(matches!(e, Err(GltfError::NonFiniteTransform { node: 0 })));
         let e = read(&base_with(r#""nodes":[{"mesh":0}]"#, r#""nodes":[{"mesh":0,"scale":[1e39,1,1]}]"#));
-        assert!(matches!(e, Err(GltfError::NonFiniteTransform { node: 0 })));
+        // Depending on serde_json's `float_roundtrip` feature (enabled by another
+        // dependency) 1e39 is refused while parsing or read as an infinite f32.
+        assert!(matches!(e, Err(GltfError::NonFiniteTransform { node: 0 } | GltfError::Json(_))), "{e:?}");
     }
 
     #[test]
