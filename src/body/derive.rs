@@ -31,7 +31,7 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use super::feature::{FeatureBody, FeatureCurve, FeaturePoint, Frame};
-use super::vocab::{self, CurveId, CurveRule, LoopChoice, PlaneRule, PointId};
+use super::vocab::{self, CurveId, CurveRule, LoopChoice, Pick, PlaneRule, PointId};
 use crate::geom::mesh::{MeshError, TriMesh};
 use crate::geom::plane::Plane;
 use crate::geom::polyline::Polyline;
@@ -236,7 +236,14 @@ pub fn derive_features(
     for def in vocab::POINTS {
         let c1 = &curves[&def.f1].polyline;
         let c2 = &curves[&def.f2].polyline;
-        let near = snapped.get(&def.id).copied().unwrap_or_else(|| 0.5 * (c1.centroid() + c2.centroid()));
+        let near = match def.pick {
+            Pick::Landmark => snapped.get(&def.id).copied().unwrap_or_else(|| 0.5 * (c1.centroid() + c2.centroid())),
+            Pick::Medial => {
+                let mid_x = snapped.get(&PointId::Crotch).map_or(0.0, |p| p.x);
+                let c = c1.centroid();
+                DVec3::new(mid_x, c.y, c.z)
+            }
+        };
         let gap_tol = 1e-9 * stature;
         let cross = c1.crossing(c2, near, gap_tol).ok_or(FeatureError::CurvesDoNotCross {
             point: def.id,
@@ -303,6 +310,7 @@ fn section_plane(curve: CurveId, rule: PlaneRule, pts: &[DVec3], opts: &DeriveOp
             })?
         }
         PlaneRule::Normal(axis) => Plane { normal: axis.vector(), offset: axis.vector().dot(pts[0]) },
+        PlaneRule::NormalThroughMean(axis) => Plane { normal: axis.vector(), offset: axis.vector().dot(c) },
     };
     Ok(plane)
 }

@@ -27,7 +27,9 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 /// Version of this registry. Bump when an ID is added, removed or changes
 /// meaning; templates and landmark files record the version they use.
-pub const VOCABULARY_VERSION: u32 = 1;
+/// Version 2 added the inner (medial) thigh, knee and ankle points and
+/// the leg lines that define them.
+pub const VOCABULARY_VERSION: u32 = 2;
 
 macro_rules! id_enum {
     ($(#[$doc:meta])* $name:ident { $($(#[$vdoc:meta])* $var:ident = $s:literal),+ $(,)? }) => {
@@ -118,6 +120,11 @@ id_enum! {
         ShoulderLineRight = "shoulder_line_right",
         /// Crotch line: the front-view (coronal) section through the crotch point.
         CrotchLine = "crotch_line",
+        /// Left leg line: the coronal section at the mean depth of the left leg's side points; it runs down the
+        /// outside and up the inside of the leg.
+        LegLineLeft = "leg_line_left",
+        /// Right leg line.
+        LegLineRight = "leg_line_right",
     }
 }
 
@@ -190,6 +197,18 @@ id_enum! {
         AnkleLeft = "ankle_left",
         /// Right ankle girth at the side line.
         AnkleRight = "ankle_right",
+        /// Left thigh girth at the inside of the leg (crotch line crossing).
+        ThighLeftInner = "thigh_left_inner",
+        /// Right thigh girth at the inside of the leg.
+        ThighRightInner = "thigh_right_inner",
+        /// Left knee girth at the inside of the leg.
+        KneeLeftInner = "knee_left_inner",
+        /// Right knee girth at the inside of the leg.
+        KneeRightInner = "knee_right_inner",
+        /// Left ankle girth at the inside of the leg.
+        AnkleLeftInner = "ankle_left_inner",
+        /// Right ankle girth at the inside of the leg.
+        AnkleRightInner = "ankle_right_inner",
     }
 }
 
@@ -233,6 +252,8 @@ pub enum PlaneRule {
     Containing(Axis),
     /// Through the (first) landmark with this normal.
     Normal(Axis),
+    /// Through the landmarks' mean with this normal.
+    NormalThroughMean(Axis),
 }
 
 /// Which loop of a plane section is the curve.
@@ -290,6 +311,19 @@ pub struct PointDef {
     pub f1: CurveId,
     /// Second curve `f2`.
     pub f2: CurveId,
+    /// Which crossing of the two curves is the point.
+    pub pick: Pick,
+}
+
+/// Which of several crossings of two curves is the feature point.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Pick {
+    /// The one nearest the point's landmark.
+    Landmark,
+    /// The one nearest the body's midline (x of the crotch point) at the
+    /// height and depth of the first curve's centroid: the inside of a
+    /// leg. These points need no landmark.
+    Medial,
 }
 
 use PointId as P;
@@ -459,10 +493,34 @@ pub const CURVES: &[CurveDef] = &[
         name: "crotch line",
         rule: section(&[P::Crotch], PlaneRule::Normal(Axis::Z), LoopChoice::Nearest, Axis::Z),
     },
+    CurveDef {
+        id: CurveId::LegLineLeft,
+        name: "left leg line",
+        rule: section(
+            &[P::ThighLeft, P::KneeLeft, P::AnkleLeft],
+            PlaneRule::NormalThroughMean(Axis::Z),
+            LoopChoice::Nearest,
+            Axis::Z,
+        ),
+    },
+    CurveDef {
+        id: CurveId::LegLineRight,
+        name: "right leg line",
+        rule: section(
+            &[P::ThighRight, P::KneeRight, P::AnkleRight],
+            PlaneRule::NormalThroughMean(Axis::Z),
+            LoopChoice::Nearest,
+            Axis::Z,
+        ),
+    },
 ];
 
 const fn pt(id: P, name: &'static str, f1: CurveId, f2: CurveId) -> PointDef {
-    PointDef { id, name, f1, f2 }
+    PointDef { id, name, f1, f2, pick: Pick::Landmark }
+}
+
+const fn medial(id: P, name: &'static str, f1: CurveId, f2: CurveId) -> PointDef {
+    PointDef { id, name, f1, f2, pick: Pick::Medial }
 }
 
 /// Every feature point of vocabulary version [`VOCABULARY_VERSION`].
@@ -500,6 +558,12 @@ pub const POINTS: &[PointDef] = &[
     pt(P::KneeRight, "right knee side point", CurveId::KneeRight, CurveId::SideLineRight),
     pt(P::AnkleLeft, "left ankle side point", CurveId::AnkleLeft, CurveId::SideLineLeft),
     pt(P::AnkleRight, "right ankle side point", CurveId::AnkleRight, CurveId::SideLineRight),
+    medial(P::ThighLeftInner, "left inner thigh point", CurveId::ThighLeft, CurveId::LegLineLeft),
+    medial(P::ThighRightInner, "right inner thigh point", CurveId::ThighRight, CurveId::LegLineRight),
+    medial(P::KneeLeftInner, "left inner knee point", CurveId::KneeLeft, CurveId::LegLineLeft),
+    medial(P::KneeRightInner, "right inner knee point", CurveId::KneeRight, CurveId::LegLineRight),
+    medial(P::AnkleLeftInner, "left inner ankle point", CurveId::AnkleLeft, CurveId::LegLineLeft),
+    medial(P::AnkleRightInner, "right inner ankle point", CurveId::AnkleRight, CurveId::LegLineRight),
 ];
 
 /// The registry entry of a curve.
@@ -551,7 +615,7 @@ mod tests {
         // every point except the chest front/back crossings.
         let req = required_landmarks();
         for p in PointId::ALL {
-            if !matches!(p, P::ChestFront | P::ChestBack) {
+            if !matches!(p, P::ChestFront | P::ChestBack) && point_def(*p).pick == Pick::Landmark {
                 assert!(req.contains(p), "{p} is not a landmark");
             }
         }
