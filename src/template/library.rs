@@ -19,7 +19,7 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use super::codec::{encode, CodecError, Draft, DraftPanel, DraftSeam};
-use super::format::{GradingDefaults, Template, TemplateError};
+use super::format::{Template, TemplateError};
 use crate::body::derive::{derive_features, DeriveOptions, FeatureError};
 use crate::body::feature::FeatureBody;
 use crate::body::vocab::{CurveId, PointId};
@@ -90,28 +90,190 @@ impl Default for SkirtOptions {
 
 const MM: f64 = 1e-3;
 
-/// Arc-length parameters of 8 ring nodes on a girth: front, front-left,
-/// left, back-left, back, back-right, right, front-right (the girth runs
-/// anticlockwise seen from above, front → left → back → right).
-fn ring_params(
-    body: &FeatureBody,
-    curve: CurveId,
-    cardinal: [PointId; 4],
-) -> Result<(Polyline, [f64; 8]), AuthorError> {
-    let loop_ = body.curves.get(&curve).ok_or_else(|| AuthorError::Missing(curve.to_string()))?.polyline.clone();
-    let total = loop_.length();
-    let mut s = [0.0; 4];
-    for (k, id) in cardinal.iter().enumerate() {
-        let p = body.points.get(id).ok_or_else(|| AuthorError::Missing(id.to_string()))?.position;
-        s[k] = loop_.closest(p).map_or(0.0, |c| c.s);
+/// A ring of nodes on a girth: node ids, the girth, their arc parameters
+/// and the radial ease offset.
+#[derive(Debug, Clone)]
+struct Ring {
+    nodes: Vec<u32>,
+    curve: Polyline,
+    params: Vec<f64>,
+    radial: f64,
+}
+
+/// Incremental construction of a [`Draft`] on the reference body.
+struct Builder<'a> {
+    body: &'a FeatureBody,
+    draft: Draft,
+    profile_points: usize,
+}
+
+impl<'a> Builder<'a> {
+    fn new(body: &'a FeatureBody, profile_points: usize) -> Self {
+        Self { body, draft: Draft::default(), profile_points: profile_points.max(2) }
     }
-    let fwd = |a: f64, b: f64| (b - a).rem_euclid(total);
-    let mut out = [0.0; 8];
-    for k in 0..4 {
-        out[2 * k] = s[k];
-        out[2 * k + 1] = (s[k] + 0.5 * fwd(s[k], s[(k + 1) % 4])).rem_euclid(total);
+
+    fn point(&self, id: PointId) -> Result<DVec3, AuthorError> {
+        self.body.points.get(&id).map(|p| p.position).ok_or_else(|| AuthorError::Missing(id.to_string()))
     }
-    Ok((loop_, out))
+
+    fn curve(&self, id: CurveId) -> Result<&Polyline, AuthorError> {
+        self.body.curves.get(&id).map(|c| &c.polyline).ok_or_else(|| AuthorError::Missing(id.to_string()))
+    }
+
+    fn node(&mut self, p: DVec3, tie: Option<PointId>) -> u32 {
+        self.draft.positions.push(p);
+        self.draft.ties.push(tie);
+        (self.draft.positions.len() - 1) as u32
+    }
+
+    /// A ring on girth `curve` through the `cardinal` points (in the girth's
+    /// direction: anticlockwise seen from above), with a node midway (by
+    /// arc length) between consecutive cardinals; eased outwards by
+    /// `ease_mm / 2π`. Midway nodes are tied to the preceding cardinal.
+    /// Every ring edge gets a profile along the eased girth.
+    fn ring(&mut self, curve: CurveId, cardinal: &[PointId], ease_mm: f64) -> Result<Ring, AuthorError> {
+        let loop_ = self.curve(curve)?.clone();
+        let total = loop_.length();
+        let mut s = Vec::new();
+        for id in cardinal {
+            let p = self.point(*id)?;
+            s.push(loop_.closest(p).map_or(0.0, |c| c.s));
+        }
+        let fwd = |a: f64, b: f64| (b - a).rem_euclid(total);
+        let k = s.len();
+        let mut params = Vec::with_capacity(2 * k);
+        let mut ties = Vec::with_capacity(2 * k);
+        for i in 0..k {
+            params.push(s[i]);
+            ties.push(cardinal[i]);
+            params.push((s[i] + 0.5 * fwd(s[i], s[(i + 1) % k])).rem_euclid(total));
+            ties.push(cardinal[i]);
+        }
+        let radial = ease_mm * MM / std::f64::consts::TAU;
+        let nodes: Vec<u32> =
+            params.iter().zip(&ties).map(|(&t, &tie)| self.node(eased(&loop_, t, radial), Some(tie))).collect();
+        let ring = Ring { nodes, curve: loop_, params, radial };
+        for i in 0..ring.nodes.len() {
+            let j = (i + 1) % ring.nodes.len();
+            let pts = self.ring_arc(&ring, ring.params[i], ring.params[j]);
+            self.draft.profiles.push(((ring.nodes[i], ring.nodes[j]), pts));
+        }
+        Ok(ring)
+    }
+
+    /// Profile points along a ring's eased girth from `s0` forward to `s1`.
+    fn ring_arc(&self, ring: &Ring, s0: f64, s1: f64) -> Vec<DVec3> {
+        let total = ring.curve.length();
+        let d = (s1 - s0).rem_euclid(total);
+        let n = self.profile_points;
+        (0..n).map(|k| eased(&ring.curve, s0 + d * k as f64 / (n - 1) as f64, ring.radial)).collect()
+    }
+
+    /// A profile along a feature line between the nodes `a` and `b`,
+    /// sampled between the line's points nearest to them and moved outward
+    /// along the body normal by the nodes' own distance from the body.
+    fn line_profile(&mut self, a: u32, b: u32, line: CurveId) -> Result<(), AuthorError> {
+        let poly = self.curve(line)?.clone();
+        let (pa, pb) = (self.draft.positions[a as usize], self.draft.positions[b as usize]);
+        let (Some(ca), Some(cb)) = (poly.closest(pa), poly.closest(pb)) else {
+            return Err(AuthorError::Missing(format!("{line} near nodes {a}–{b}")));
+        };
+        let (oa, ob) = (pa - ca.point, pb - cb.point);
+        let n = self.profile_points;
+        let pts = (0..n)
+            .map(|k| {
+                let t = k as f64 / (n - 1) as f64;
+                poly.point_at(ca.s + (cb.s - ca.s) * t) + oa.lerp(ob, t)
+            })
+            .collect();
+        self.draft.profiles.push(((a, b), pts));
+        Ok(())
+    }
+
+    fn tri(&mut self, a: u32, b: u32, c: u32) -> usize {
+        self.draft.triangles.push([a, b, c]);
+        self.draft.triangles.len() - 1
+    }
+
+    /// Two triangles `[a, b, c]`, `[a, c, d]`; returns their indices.
+    fn quad(&mut self, a: u32, b: u32, c: u32, d: u32) -> [usize; 2] {
+        [self.tri(a, b, c), self.tri(a, c, d)]
+    }
+
+    /// Quads between two rings of equal length, column `i` joining ring
+    /// nodes `i` and `i + 1`; returns the triangles of each column.
+    fn band(&mut self, upper: &Ring, lower: &Ring) -> Vec<[usize; 2]> {
+        let n = upper.nodes.len();
+        (0..n)
+            .map(|i| {
+                let j = (i + 1) % n;
+                self.quad(upper.nodes[i], upper.nodes[j], lower.nodes[j], lower.nodes[i])
+            })
+            .collect()
+    }
+
+    /// Orients every triangle consistently (breadth-first over shared
+    /// edges) and outwards: the area-weighted vote of each triangle's
+    /// normal against the body normal at the closest body point.
+    fn orient(&mut self) {
+        let tris = &mut self.draft.triangles;
+        let mut by_edge: BTreeMap<(u32, u32), Vec<usize>> = BTreeMap::new();
+        for (f, t) in tris.iter().enumerate() {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                by_edge.entry((a.min(b), a.max(b))).or_default().push(f);
+            }
+        }
+        let has_dir = |t: &[u32; 3], a: u32, b: u32| (0..3).any(|k| t[k] == a && t[(k + 1) % 3] == b);
+        let mut done = vec![false; tris.len()];
+        for seed in 0..tris.len() {
+            if done[seed] {
+                continue;
+            }
+            done[seed] = true;
+            let mut queue = std::collections::VecDeque::from([seed]);
+            while let Some(f) = queue.pop_front() {
+                let t = tris[f];
+                for k in 0..3 {
+                    let (a, b) = (t[k], t[(k + 1) % 3]);
+                    for &g in &by_edge[&(a.min(b), a.max(b))] {
+                        if g == f || done[g] {
+                            continue;
+                        }
+                        if has_dir(&tris[g], a, b) {
+                            tris[g].swap(1, 2);
+                        }
+                        done[g] = true;
+                        queue.push_back(g);
+                    }
+                }
+            }
+        }
+        let pos = &self.draft.positions;
+        let mesh = &self.body.mesh;
+        let vote: f64 = tris
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|v| pos[v as usize]);
+                let n = (b - a).cross(c - a);
+                let body = crate::geom::query::closest_point(mesh, (a + b + c) / 3.0);
+                n.dot(mesh.face_area_vector(body.face).normalize_or_zero())
+            })
+            .sum();
+        if vote < 0.0 {
+            for t in tris.iter_mut() {
+                t.swap(1, 2);
+            }
+        }
+    }
+
+    fn panel(&mut self, name: &str, triangles: Vec<usize>, grain: (u32, u32)) {
+        self.draft.panels.push(DraftPanel { name: name.to_owned(), triangles, grain, quantity: 1 });
+    }
+
+    fn seam(&mut self, name: &str, a: &str, b: &str, nodes: Vec<u32>) {
+        self.draft.seams.push(DraftSeam { name: name.into(), panel_a: a.into(), panel_b: b.into(), nodes });
+    }
 }
 
 /// A point of a girth at arc length `s`, moved outwards horizontally (away
@@ -128,128 +290,51 @@ fn eased(loop_: &Polyline, s: f64, radial: f64) -> DVec3 {
 /// hem, and on the centre and side lines between waist and hip.
 pub fn straight_skirt(body: &FeatureBody, o: &SkirtOptions) -> Result<Template, AuthorError> {
     use PointId as P;
-    let two_pi = std::f64::consts::TAU;
-    let (waist, ws) = ring_params(body, CurveId::Waist, [P::WaistFront, P::WaistLeft, P::WaistBack, P::WaistRight])?;
-    let (hip, hs) = ring_params(body, CurveId::Hip, [P::HipFront, P::HipLeft, P::HipBack, P::HipRight])?;
-    let rw = o.waist_ease_mm * MM / two_pi;
-    let rh = o.hip_ease_mm * MM / two_pi;
-    let hip_c = hip.centroid();
+    let mut b = Builder::new(body, o.profile_points);
+    let waist = b.ring(CurveId::Waist, &[P::WaistFront, P::WaistLeft, P::WaistBack, P::WaistRight], o.waist_ease_mm)?;
+    let hip = b.ring(CurveId::Hip, &[P::HipFront, P::HipLeft, P::HipBack, P::HipRight], o.hip_ease_mm)?;
+    let hip_c = hip.curve.centroid();
     let hem_of = |p: DVec3| -> DVec3 {
         let out = DVec3::new(p.x - hip_c.x, 0.0, p.z - hip_c.z).normalize_or_zero();
         p - DVec3::Y * o.length_below_hip_m + out * (o.hem_flare_mm * MM)
     };
-    let mut positions = Vec::new();
-    let mut ties = Vec::new();
-    let waist_ties = [P::WaistFront, P::WaistLeft, P::WaistBack, P::WaistRight];
-    let hip_ties = [P::HipFront, P::HipLeft, P::HipBack, P::HipRight];
-    for (k, &s) in ws.iter().enumerate() {
-        positions.push(eased(&waist, s, rw));
-        ties.push(Some(waist_ties[k / 2]));
-    }
-    for (k, &s) in hs.iter().enumerate() {
-        positions.push(eased(&hip, s, rh));
-        ties.push(Some(hip_ties[k / 2]));
-    }
-    for k in 0..8 {
-        positions.push(hem_of(positions[8 + k]));
-        ties.push(Some(hip_ties[k / 2]));
-    }
-    // triangles: quads between rings, outward-facing
-    let mut triangles = Vec::new();
-    let mut quad_of_column: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
-    for r in 0..2u32 {
-        for i in 0..8u32 {
-            let a = r * 8 + i;
-            let b = r * 8 + (i + 1) % 8;
-            let c = (r + 1) * 8 + (i + 1) % 8;
-            let d = (r + 1) * 8 + i;
-            quad_of_column.entry(i as usize).or_default().extend([triangles.len(), triangles.len() + 1]);
-            triangles.push([a, d, c]);
-            triangles.push([a, c, b]);
-        }
-    }
-    // profiles
-    let n = o.profile_points.max(2);
-    let total_w = waist.length();
-    let total_h = hip.length();
-    let mut profiles = Vec::new();
+    let hem_nodes: Vec<u32> = hip
+        .nodes
+        .iter()
+        .map(|&v| {
+            let (p, tie) = (b.draft.positions[v as usize], b.draft.ties[v as usize]);
+            b.node(hem_of(p), tie)
+        })
+        .collect();
     for i in 0..8 {
         let j = (i + 1) % 8;
-        let span = |s0: f64, s1: f64, total: f64| (s1 - s0).rem_euclid(total);
-        let (sw0, dw) = (ws[i], span(ws[i], ws[j], total_w));
-        let (sh0, dh) = (hs[i], span(hs[i], hs[j], total_h));
-        let wpts: Vec<DVec3> = (0..n).map(|k| eased(&waist, sw0 + dw * k as f64 / (n - 1) as f64, rw)).collect();
-        let hpts: Vec<DVec3> = (0..n).map(|k| eased(&hip, sh0 + dh * k as f64 / (n - 1) as f64, rh)).collect();
-        let hem: Vec<DVec3> = hpts.iter().map(|&p| hem_of(p)).collect();
-        profiles.push(((i as u32, j as u32), wpts));
-        profiles.push(((8 + i as u32, 8 + j as u32), hpts));
-        profiles.push(((16 + i as u32, 16 + j as u32), hem));
+        let pts: Vec<DVec3> = b.ring_arc(&hip, hip.params[i], hip.params[j]).into_iter().map(hem_of).collect();
+        b.draft.profiles.push(((hem_nodes[i], hem_nodes[j]), pts));
     }
-    // vertical profiles waist → hip along the centre and side lines
-    let columns = [
-        (0u32, CurveId::CentreFront),
-        (2, CurveId::SideLineLeft),
-        (4, CurveId::CentreBack),
-        (6, CurveId::SideLineRight),
-    ];
-    for (col, curve) in columns {
-        let line = &body.curves.get(&curve).ok_or_else(|| AuthorError::Missing(curve.to_string()))?.polyline;
-        let a = body.points[&waist_ties[col as usize / 2]].position;
-        let b = body.points[&hip_ties[col as usize / 2]].position;
-        let (Some(ca), Some(cb)) = (line.closest(a), line.closest(b)) else {
-            return Err(AuthorError::Missing(format!("{curve} between waist and hip")));
-        };
-        let pts: Vec<DVec3> = (0..n)
-            .map(|k| {
-                let t = k as f64 / (n - 1) as f64;
-                let p = line.point_at(ca.s + (cb.s - ca.s) * t);
-                let c = waist.centroid().lerp(hip_c, t);
-                let out = DVec3::new(p.x - c.x, 0.0, p.z - c.z).normalize_or_zero();
-                p + out * (rw + (rh - rw) * t)
-            })
-            .collect();
-        profiles.push(((col, 8 + col), pts));
+    let hem = Ring { nodes: hem_nodes, ..hip.clone() };
+    let upper = b.band(&waist, &hip);
+    let lower = b.band(&hip, &hem);
+    for (col, line) in [(0, CurveId::CentreFront), (2, CurveId::SideLineLeft), (4, CurveId::CentreBack), (6, CurveId::SideLineRight)] {
+        b.line_profile(waist.nodes[col], hip.nodes[col], line)?;
     }
-    let panel = |name: &str, cols: [usize; 4], grain: (u32, u32)| DraftPanel {
-        name: name.to_owned(),
-        triangles: cols.iter().flat_map(|c| quad_of_column[c].clone()).collect(),
-        grain,
-        quantity: 1,
-    };
-    let draft = Draft {
-        name: "straight-skirt".into(),
-        version: 1,
-        description: "Straight skirt with a slight hem flare: waistband line, hip line and hem; front and back \
-                      panels joined by side seams."
-            .into(),
-        ease_mm: BTreeMap::from([
-            ("waist".to_owned(), o.waist_ease_mm),
-            ("hip".to_owned(), o.hip_ease_mm),
-            ("hem_flare_radial".to_owned(), o.hem_flare_mm),
-        ]),
-        positions,
-        ties,
-        triangles,
-        profiles,
-        panels: vec![panel("front", [6, 7, 0, 1], (0, 16)), panel("back", [2, 3, 4, 5], (4, 20))],
-        seams: vec![
-            DraftSeam {
-                name: "side_left".into(),
-                panel_a: "front".into(),
-                panel_b: "back".into(),
-                nodes: vec![2, 10, 18],
-            },
-            DraftSeam {
-                name: "side_right".into(),
-                panel_a: "back".into(),
-                panel_b: "front".into(),
-                nodes: vec![6, 14, 22],
-            },
-        ],
-        notches: vec![("hip".into(), 10), ("hip".into(), 14)],
-        defaults: GradingDefaults::default(),
-    };
-    Ok(encode(&draft, body)?)
+    b.orient();
+    let cols = |c: [usize; 4]| -> Vec<usize> { c.iter().flat_map(|&i| upper[i].into_iter().chain(lower[i])).collect() };
+    b.panel("front", cols([6, 7, 0, 1]), (waist.nodes[0], hem.nodes[0]));
+    b.panel("back", cols([2, 3, 4, 5]), (waist.nodes[4], hem.nodes[4]));
+    b.seam("side_left", "front", "back", vec![waist.nodes[2], hip.nodes[2], hem.nodes[2]]);
+    b.seam("side_right", "back", "front", vec![waist.nodes[6], hip.nodes[6], hem.nodes[6]]);
+    b.draft.notches = vec![("hip".into(), hip.nodes[2]), ("hip".into(), hip.nodes[6])];
+    b.draft.name = "straight-skirt".into();
+    b.draft.version = 1;
+    b.draft.description = "Straight skirt with a slight hem flare: waistband line, hip line and hem; front and back \
+                           panels joined by side seams."
+        .into();
+    b.draft.ease_mm = BTreeMap::from([
+        ("waist".to_owned(), o.waist_ease_mm),
+        ("hip".to_owned(), o.hip_ease_mm),
+        ("hem_flare_radial".to_owned(), o.hem_flare_mm),
+    ]);
+    Ok(encode(&b.draft, body)?)
 }
 
 /// Authors every built-in template on the reference body.
