@@ -10,7 +10,7 @@ use grade3d::geom::simplify::{check_oriented_manifold, SimplifyOptions};
 use grade3d::io::gltf::read_mesh;
 use grade3d::template::codec::{decode, CoarseMesh};
 use grade3d::template::format::{Relocation, Template};
-use grade3d::template::library::{builtin, reference_body, straight_skirt, SkirtOptions};
+use grade3d::template::library::{author_all, builtin, reference_body};
 use grade3d::template::topology::topology_by_simplification;
 use proptest::prelude::*;
 use std::sync::OnceLock;
@@ -34,9 +34,14 @@ fn size_of(body: &FeatureBody) -> f64 {
 
 #[test]
 fn shipped_templates_are_what_the_authoring_code_writes() {
-    let authored = straight_skirt(reference(), &SkirtOptions::default()).unwrap();
-    let shipped = library().iter().find(|t| t.name == "straight-skirt").unwrap();
-    assert_eq!(&authored, shipped, "templates/garments is stale: run `cargo run --release -- data templates`");
+    let authored = author_all().unwrap();
+    assert_eq!(authored.len(), library().len());
+    for t in &authored {
+        let shipped = library().iter().find(|s| s.name == t.name).unwrap();
+        assert_eq!(t, shipped, "templates/garments is stale: run `cargo run --release -- data templates`");
+    }
+    let names: Vec<&str> = library().iter().map(|t| t.name.as_str()).collect();
+    assert_eq!(names, ["straight-skirt", "trousers", "fitted-bodice"]);
 }
 
 #[test]

@@ -38,6 +38,14 @@ use crate::geom::polyline::Polyline;
 use crate::geom::query::{closest_point, disc_normal};
 use crate::geom::slice::slice;
 
+/// Distance of the aiming point of a [`Pick::Toward`] crossing, m: far
+/// beyond any body, so the nearest crossing is the extreme one.
+const FAR_M: f64 = 100.0;
+
+/// Where the middle of a leg lies between the midline and the mean of its
+/// outer side points (a fraction of the way out).
+const LEG_MIDDLE_FRACTION: f64 = 0.55;
+
 /// Millimetres per metre.
 pub const MM_PER_M: f64 = 1000.0;
 
@@ -70,8 +78,11 @@ pub struct DeriveOptions {
     pub min_frame_triple: f64,
     /// Largest accepted gap between two curves at their crossing, mm. Default 5.
     pub max_crossing_gap_mm: f64,
-    /// How far below the armpit landmarks the chest girth is taken, mm. Default 25.
+    /// How far below the armpit landmarks the chest girth is taken, mm. Default 10.
     pub chest_below_armpit_mm: f64,
+    /// Half the width of an ankle, used to aim the leg sagittal line at the
+    /// middle of the ankle from its outer side point, mm. Default 35.
+    pub ankle_half_width_mm: f64,
     /// Vertices closer than this are merged before slicing (scans often
     /// arrive split along UV or normal seams), mm. Default 0.01.
     pub weld_tolerance_mm: f64,
@@ -91,9 +102,10 @@ impl Default for DeriveOptions {
             normal_radius_mm: 15.0,
             min_frame_triple: 0.1,
             max_crossing_gap_mm: 5.0,
-            chest_below_armpit_mm: 25.0,
+            chest_below_armpit_mm: 10.0,
             path_extension_mm: 30.0,
             weld_tolerance_mm: 0.01,
+            ankle_half_width_mm: 35.0,
         }
     }
 }
@@ -238,11 +250,7 @@ pub fn derive_features(
         let c2 = &curves[&def.f2].polyline;
         let near = match def.pick {
             Pick::Landmark => snapped.get(&def.id).copied().unwrap_or_else(|| 0.5 * (c1.centroid() + c2.centroid())),
-            Pick::Medial => {
-                let mid_x = snapped.get(&PointId::Crotch).map_or(0.0, |p| p.x);
-                let c = c1.centroid();
-                DVec3::new(mid_x, c.y, c.z)
-            }
+            Pick::Toward(dir) => c1.centroid() + DVec3::from_array(dir) * FAR_M,
         };
         let gap_tol = 1e-9 * stature;
         let cross = c1.crossing(c2, near, gap_tol).ok_or(FeatureError::CurvesDoNotCross {
@@ -311,6 +319,28 @@ fn section_plane(curve: CurveId, rule: PlaneRule, pts: &[DVec3], opts: &DeriveOp
         }
         PlaneRule::Normal(axis) => Plane { normal: axis.vector(), offset: axis.vector().dot(pts[0]) },
         PlaneRule::NormalThroughMean(axis) => Plane { normal: axis.vector(), offset: axis.vector().dot(c) },
+        PlaneRule::VerticalAtAngle(deg) => {
+            let t = deg.to_radians();
+            let n = DVec3::new(t.cos(), 0.0, -t.sin());
+            Plane { normal: n, offset: n.dot(c) }
+        }
+        PlaneRule::LegSagittal => {
+            // landmarks: thigh side point, ankle side point, crotch (the midline)
+            let [thigh, ankle, crotch] = match pts {
+                [t, a, c] => [*t, *a, *c],
+                _ => {
+                    return Err(FeatureError::NoSection {
+                        curve,
+                        reason: "(rule needs thigh, ankle and crotch)".into(),
+                    })
+                }
+            };
+            let thigh_mid = DVec3::new(crotch.x + LEG_MIDDLE_FRACTION * (thigh.x - crotch.x), thigh.y, thigh.z);
+            let inward = (crotch.x - ankle.x).signum();
+            let ankle_mid = DVec3::new(ankle.x + inward * opts.ankle_half_width_mm / MM_PER_M, ankle.y, ankle.z);
+            Plane::from_point_normal(thigh_mid, (ankle_mid - thigh_mid).cross(DVec3::Z))
+                .ok_or_else(|| FeatureError::NoSection { curve, reason: "(thigh and ankle points coincide)".into() })?
+        }
     };
     Ok(plane)
 }

@@ -27,8 +27,9 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 /// Version of this registry. Bump when an ID is added, removed or changes
 /// meaning; templates and landmark files record the version they use.
-/// Version 2 added the inner (medial) thigh, knee and ankle points and
-/// the leg lines that define them.
+/// Version 2 added the inner (medial) thigh, knee and ankle points, the
+/// oblique torso points, the leg front/back points, and the lines that
+/// define them.
 pub const VOCABULARY_VERSION: u32 = 2;
 
 macro_rules! id_enum {
@@ -125,6 +126,16 @@ id_enum! {
         LegLineLeft = "leg_line_left",
         /// Right leg line.
         LegLineRight = "leg_line_right",
+        /// Oblique line through the front-left and back-right of the torso: the section of the vertical plane
+        /// at 45° between the sagittal and coronal planes, through the waist's centre.
+        ObliqueFrontLeft = "oblique_front_left",
+        /// Oblique line through the front-right and back-left of the torso.
+        ObliqueFrontRight = "oblique_front_right",
+        /// Left leg sagittal line: the section of the sagittal plane through the mean of the left leg's girth
+        /// points; it runs down the front and up the back of the leg.
+        LegSagittalLeft = "leg_sagittal_left",
+        /// Right leg sagittal line.
+        LegSagittalRight = "leg_sagittal_right",
     }
 }
 
@@ -209,6 +220,78 @@ id_enum! {
         AnkleLeftInner = "ankle_left_inner",
         /// Right ankle girth at the inside of the leg.
         AnkleRightInner = "ankle_right_inner",
+        /// Neck base girth at the front-left oblique line.
+        NeckFrontLeft = "neck_front_left",
+        /// Neck base girth at the back-left oblique line.
+        NeckBackLeft = "neck_back_left",
+        /// Neck base girth at the back-right oblique line.
+        NeckBackRight = "neck_back_right",
+        /// Neck base girth at the front-right oblique line.
+        NeckFrontRight = "neck_front_right",
+        /// Chest girth at the front-left oblique line.
+        ChestFrontLeft = "chest_front_left",
+        /// Chest girth at the back-left oblique line.
+        ChestBackLeft = "chest_back_left",
+        /// Chest girth at the back-right oblique line.
+        ChestBackRight = "chest_back_right",
+        /// Chest girth at the front-right oblique line.
+        ChestFrontRight = "chest_front_right",
+        /// Bust girth at the front-left oblique line.
+        BustFrontLeft = "bust_front_left",
+        /// Bust girth at the back-left oblique line.
+        BustBackLeft = "bust_back_left",
+        /// Bust girth at the back-right oblique line.
+        BustBackRight = "bust_back_right",
+        /// Bust girth at the front-right oblique line.
+        BustFrontRight = "bust_front_right",
+        /// Underbust girth at the front-left oblique line.
+        UnderbustFrontLeft = "underbust_front_left",
+        /// Underbust girth at the back-left oblique line.
+        UnderbustBackLeft = "underbust_back_left",
+        /// Underbust girth at the back-right oblique line.
+        UnderbustBackRight = "underbust_back_right",
+        /// Underbust girth at the front-right oblique line.
+        UnderbustFrontRight = "underbust_front_right",
+        /// Waist girth at the front-left oblique line.
+        WaistFrontLeft = "waist_front_left",
+        /// Waist girth at the back-left oblique line.
+        WaistBackLeft = "waist_back_left",
+        /// Waist girth at the back-right oblique line.
+        WaistBackRight = "waist_back_right",
+        /// Waist girth at the front-right oblique line.
+        WaistFrontRight = "waist_front_right",
+        /// Hip girth at the front-left oblique line.
+        HipFrontLeft = "hip_front_left",
+        /// Hip girth at the back-left oblique line.
+        HipBackLeft = "hip_back_left",
+        /// Hip girth at the back-right oblique line.
+        HipBackRight = "hip_back_right",
+        /// Hip girth at the front-right oblique line.
+        HipFrontRight = "hip_front_right",
+        /// Left thigh girth at the front of the leg.
+        ThighLeftFront = "thigh_left_front",
+        /// Left thigh girth at the back of the leg.
+        ThighLeftBack = "thigh_left_back",
+        /// Right thigh girth at the front of the leg.
+        ThighRightFront = "thigh_right_front",
+        /// Right thigh girth at the back of the leg.
+        ThighRightBack = "thigh_right_back",
+        /// Left knee girth at the front of the leg.
+        KneeLeftFront = "knee_left_front",
+        /// Left knee girth at the back of the leg.
+        KneeLeftBack = "knee_left_back",
+        /// Right knee girth at the front of the leg.
+        KneeRightFront = "knee_right_front",
+        /// Right knee girth at the back of the leg.
+        KneeRightBack = "knee_right_back",
+        /// Left ankle girth at the front of the leg.
+        AnkleLeftFront = "ankle_left_front",
+        /// Left ankle girth at the back of the leg.
+        AnkleLeftBack = "ankle_left_back",
+        /// Right ankle girth at the front of the leg.
+        AnkleRightFront = "ankle_right_front",
+        /// Right ankle girth at the back of the leg.
+        AnkleRightBack = "ankle_right_back",
     }
 }
 
@@ -254,6 +337,15 @@ pub enum PlaneRule {
     Normal(Axis),
     /// Through the landmarks' mean with this normal.
     NormalThroughMean(Axis),
+    /// Vertical, through the landmarks' mean, at this angle (degrees,
+    /// positive towards the body's left) from the sagittal plane: normal
+    /// `(cos θ, 0, −sin θ)`.
+    VerticalAtAngle(f64),
+    /// Through the middle of a leg, containing Z: landmarks are the thigh
+    /// and ankle side points and the crotch; the plane passes 55 % of the
+    /// way from the crotch to the thigh side point and half an ankle
+    /// width (`ankle_half_width_mm`) inside the ankle side point.
+    LegSagittal,
 }
 
 /// Which loop of a plane section is the curve.
@@ -316,14 +408,14 @@ pub struct PointDef {
 }
 
 /// Which of several crossings of two curves is the feature point.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Pick {
     /// The one nearest the point's landmark.
     Landmark,
-    /// The one nearest the body's midline (x of the crotch point) at the
-    /// height and depth of the first curve's centroid: the inside of a
-    /// leg. These points need no landmark.
-    Medial,
+    /// The one farthest from the first curve's centroid in this direction
+    /// (e.g. `[-1, 0, 0]`: the inside of the left leg). These points need
+    /// no landmark.
+    Toward([f64; 3]),
 }
 
 use PointId as P;
@@ -361,22 +453,22 @@ pub const CURVES: &[CurveDef] = &[
     CurveDef {
         id: CurveId::Bust,
         name: "bust girth",
-        rule: section(&BUST, PlaneRule::BestFit, LoopChoice::Encloses, Axis::Y),
+        rule: section(&BUST, PlaneRule::Horizontal, LoopChoice::Encloses, Axis::Y),
     },
     CurveDef {
         id: CurveId::Underbust,
         name: "underbust girth",
-        rule: section(&UNDERBUST, PlaneRule::BestFit, LoopChoice::Encloses, Axis::Y),
+        rule: section(&UNDERBUST, PlaneRule::Horizontal, LoopChoice::Encloses, Axis::Y),
     },
     CurveDef {
         id: CurveId::Waist,
         name: "waist girth",
-        rule: section(&WAIST, PlaneRule::BestFit, LoopChoice::Encloses, Axis::Y),
+        rule: section(&WAIST, PlaneRule::Horizontal, LoopChoice::Encloses, Axis::Y),
     },
     CurveDef {
         id: CurveId::Hip,
         name: "hip girth",
-        rule: section(&HIP, PlaneRule::BestFit, LoopChoice::Encloses, Axis::Y),
+        rule: section(&HIP, PlaneRule::Horizontal, LoopChoice::Encloses, Axis::Y),
     },
     CurveDef {
         id: CurveId::ThighLeft,
@@ -513,14 +605,39 @@ pub const CURVES: &[CurveDef] = &[
             Axis::Z,
         ),
     },
+    CurveDef {
+        id: CurveId::ObliqueFrontLeft,
+        name: "oblique line front-left / back-right",
+        rule: section(&WAIST, PlaneRule::VerticalAtAngle(45.0), LoopChoice::Nearest, Axis::Y),
+    },
+    CurveDef {
+        id: CurveId::ObliqueFrontRight,
+        name: "oblique line front-right / back-left",
+        rule: section(&WAIST, PlaneRule::VerticalAtAngle(-45.0), LoopChoice::Nearest, Axis::Y),
+    },
+    CurveDef {
+        id: CurveId::LegSagittalLeft,
+        name: "left leg sagittal line",
+        rule: section(&[P::ThighLeft, P::AnkleLeft, P::Crotch], PlaneRule::LegSagittal, LoopChoice::Nearest, Axis::X),
+    },
+    CurveDef {
+        id: CurveId::LegSagittalRight,
+        name: "right leg sagittal line",
+        rule: section(
+            &[P::ThighRight, P::AnkleRight, P::Crotch],
+            PlaneRule::LegSagittal,
+            LoopChoice::Nearest,
+            Axis::NegX,
+        ),
+    },
 ];
 
 const fn pt(id: P, name: &'static str, f1: CurveId, f2: CurveId) -> PointDef {
     PointDef { id, name, f1, f2, pick: Pick::Landmark }
 }
 
-const fn medial(id: P, name: &'static str, f1: CurveId, f2: CurveId) -> PointDef {
-    PointDef { id, name, f1, f2, pick: Pick::Medial }
+const fn toward(id: P, name: &'static str, f1: CurveId, f2: CurveId, dir: [f64; 3]) -> PointDef {
+    PointDef { id, name, f1, f2, pick: Pick::Toward(dir) }
 }
 
 /// Every feature point of vocabulary version [`VOCABULARY_VERSION`].
@@ -558,12 +675,120 @@ pub const POINTS: &[PointDef] = &[
     pt(P::KneeRight, "right knee side point", CurveId::KneeRight, CurveId::SideLineRight),
     pt(P::AnkleLeft, "left ankle side point", CurveId::AnkleLeft, CurveId::SideLineLeft),
     pt(P::AnkleRight, "right ankle side point", CurveId::AnkleRight, CurveId::SideLineRight),
-    medial(P::ThighLeftInner, "left inner thigh point", CurveId::ThighLeft, CurveId::LegLineLeft),
-    medial(P::ThighRightInner, "right inner thigh point", CurveId::ThighRight, CurveId::LegLineRight),
-    medial(P::KneeLeftInner, "left inner knee point", CurveId::KneeLeft, CurveId::LegLineLeft),
-    medial(P::KneeRightInner, "right inner knee point", CurveId::KneeRight, CurveId::LegLineRight),
-    medial(P::AnkleLeftInner, "left inner ankle point", CurveId::AnkleLeft, CurveId::LegLineLeft),
-    medial(P::AnkleRightInner, "right inner ankle point", CurveId::AnkleRight, CurveId::LegLineRight),
+    toward(P::ThighLeftInner, "left inner thigh point", CurveId::ThighLeft, CurveId::LegLineLeft, [-1.0, 0.0, 0.0]),
+    toward(P::ThighRightInner, "right inner thigh point", CurveId::ThighRight, CurveId::LegLineRight, [1.0, 0.0, 0.0]),
+    toward(P::KneeLeftInner, "left inner knee point", CurveId::KneeLeft, CurveId::LegLineLeft, [-1.0, 0.0, 0.0]),
+    toward(P::KneeRightInner, "right inner knee point", CurveId::KneeRight, CurveId::LegLineRight, [1.0, 0.0, 0.0]),
+    toward(P::AnkleLeftInner, "left inner ankle point", CurveId::AnkleLeft, CurveId::LegLineLeft, [-1.0, 0.0, 0.0]),
+    toward(P::AnkleRightInner, "right inner ankle point", CurveId::AnkleRight, CurveId::LegLineRight, [1.0, 0.0, 0.0]),
+    toward(
+        P::NeckFrontLeft,
+        "neck base front-left point",
+        CurveId::NeckBase,
+        CurveId::ObliqueFrontLeft,
+        [1.0, 0.0, 1.0],
+    ),
+    toward(
+        P::NeckBackLeft,
+        "neck base back-left point",
+        CurveId::NeckBase,
+        CurveId::ObliqueFrontRight,
+        [1.0, 0.0, -1.0],
+    ),
+    toward(
+        P::NeckBackRight,
+        "neck base back-right point",
+        CurveId::NeckBase,
+        CurveId::ObliqueFrontLeft,
+        [-1.0, 0.0, -1.0],
+    ),
+    toward(
+        P::NeckFrontRight,
+        "neck base front-right point",
+        CurveId::NeckBase,
+        CurveId::ObliqueFrontRight,
+        [-1.0, 0.0, 1.0],
+    ),
+    toward(P::ChestFrontLeft, "chest front-left point", CurveId::Chest, CurveId::ObliqueFrontLeft, [1.0, 0.0, 1.0]),
+    toward(P::ChestBackLeft, "chest back-left point", CurveId::Chest, CurveId::ObliqueFrontRight, [1.0, 0.0, -1.0]),
+    toward(P::ChestBackRight, "chest back-right point", CurveId::Chest, CurveId::ObliqueFrontLeft, [-1.0, 0.0, -1.0]),
+    toward(P::ChestFrontRight, "chest front-right point", CurveId::Chest, CurveId::ObliqueFrontRight, [-1.0, 0.0, 1.0]),
+    toward(P::BustFrontLeft, "bust front-left point", CurveId::Bust, CurveId::ObliqueFrontLeft, [1.0, 0.0, 1.0]),
+    toward(P::BustBackLeft, "bust back-left point", CurveId::Bust, CurveId::ObliqueFrontRight, [1.0, 0.0, -1.0]),
+    toward(P::BustBackRight, "bust back-right point", CurveId::Bust, CurveId::ObliqueFrontLeft, [-1.0, 0.0, -1.0]),
+    toward(P::BustFrontRight, "bust front-right point", CurveId::Bust, CurveId::ObliqueFrontRight, [-1.0, 0.0, 1.0]),
+    toward(
+        P::UnderbustFrontLeft,
+        "underbust front-left point",
+        CurveId::Underbust,
+        CurveId::ObliqueFrontLeft,
+        [1.0, 0.0, 1.0],
+    ),
+    toward(
+        P::UnderbustBackLeft,
+        "underbust back-left point",
+        CurveId::Underbust,
+        CurveId::ObliqueFrontRight,
+        [1.0, 0.0, -1.0],
+    ),
+    toward(
+        P::UnderbustBackRight,
+        "underbust back-right point",
+        CurveId::Underbust,
+        CurveId::ObliqueFrontLeft,
+        [-1.0, 0.0, -1.0],
+    ),
+    toward(
+        P::UnderbustFrontRight,
+        "underbust front-right point",
+        CurveId::Underbust,
+        CurveId::ObliqueFrontRight,
+        [-1.0, 0.0, 1.0],
+    ),
+    toward(P::WaistFrontLeft, "waist front-left point", CurveId::Waist, CurveId::ObliqueFrontLeft, [1.0, 0.0, 1.0]),
+    toward(P::WaistBackLeft, "waist back-left point", CurveId::Waist, CurveId::ObliqueFrontRight, [1.0, 0.0, -1.0]),
+    toward(P::WaistBackRight, "waist back-right point", CurveId::Waist, CurveId::ObliqueFrontLeft, [-1.0, 0.0, -1.0]),
+    toward(P::WaistFrontRight, "waist front-right point", CurveId::Waist, CurveId::ObliqueFrontRight, [-1.0, 0.0, 1.0]),
+    toward(P::HipFrontLeft, "hip front-left point", CurveId::Hip, CurveId::ObliqueFrontLeft, [1.0, 0.0, 1.0]),
+    toward(P::HipBackLeft, "hip back-left point", CurveId::Hip, CurveId::ObliqueFrontRight, [1.0, 0.0, -1.0]),
+    toward(P::HipBackRight, "hip back-right point", CurveId::Hip, CurveId::ObliqueFrontLeft, [-1.0, 0.0, -1.0]),
+    toward(P::HipFrontRight, "hip front-right point", CurveId::Hip, CurveId::ObliqueFrontRight, [-1.0, 0.0, 1.0]),
+    toward(P::ThighLeftFront, "left thigh front point", CurveId::ThighLeft, CurveId::LegSagittalLeft, [0.0, 0.0, 1.0]),
+    toward(P::ThighLeftBack, "left thigh back point", CurveId::ThighLeft, CurveId::LegSagittalLeft, [0.0, 0.0, -1.0]),
+    toward(
+        P::ThighRightFront,
+        "right thigh front point",
+        CurveId::ThighRight,
+        CurveId::LegSagittalRight,
+        [0.0, 0.0, 1.0],
+    ),
+    toward(
+        P::ThighRightBack,
+        "right thigh back point",
+        CurveId::ThighRight,
+        CurveId::LegSagittalRight,
+        [0.0, 0.0, -1.0],
+    ),
+    toward(P::KneeLeftFront, "left knee front point", CurveId::KneeLeft, CurveId::LegSagittalLeft, [0.0, 0.0, 1.0]),
+    toward(P::KneeLeftBack, "left knee back point", CurveId::KneeLeft, CurveId::LegSagittalLeft, [0.0, 0.0, -1.0]),
+    toward(P::KneeRightFront, "right knee front point", CurveId::KneeRight, CurveId::LegSagittalRight, [0.0, 0.0, 1.0]),
+    toward(P::KneeRightBack, "right knee back point", CurveId::KneeRight, CurveId::LegSagittalRight, [0.0, 0.0, -1.0]),
+    toward(P::AnkleLeftFront, "left ankle front point", CurveId::AnkleLeft, CurveId::LegSagittalLeft, [0.0, 0.0, 1.0]),
+    toward(P::AnkleLeftBack, "left ankle back point", CurveId::AnkleLeft, CurveId::LegSagittalLeft, [0.0, 0.0, -1.0]),
+    toward(
+        P::AnkleRightFront,
+        "right ankle front point",
+        CurveId::AnkleRight,
+        CurveId::LegSagittalRight,
+        [0.0, 0.0, 1.0],
+    ),
+    toward(
+        P::AnkleRightBack,
+        "right ankle back point",
+        CurveId::AnkleRight,
+        CurveId::LegSagittalRight,
+        [0.0, 0.0, -1.0],
+    ),
 ];
 
 /// The registry entry of a curve.

@@ -28,7 +28,11 @@ use crate::mannequin::landmarks::{hm08_landmarks, LandmarkError};
 use crate::mannequin::model::{BodyModel, MannequinError, MannequinParams};
 
 /// The built-in template documents, in the repository under `templates/garments/`.
-const BUILTIN: &[(&str, &str)] = &[("straight-skirt", include_str!("../../templates/garments/straight-skirt.json"))];
+const BUILTIN: &[(&str, &str)] = &[
+    ("straight-skirt", include_str!("../../templates/garments/straight-skirt.json")),
+    ("trousers", include_str!("../../templates/garments/trousers.json")),
+    ("fitted-bodice", include_str!("../../templates/garments/fitted-bodice.json")),
+];
 
 /// Loads and validates every built-in template.
 pub fn builtin() -> Result<Vec<Template>, (String, TemplateError)> {
@@ -90,6 +94,41 @@ impl Default for SkirtOptions {
 
 const MM: f64 = 1e-3;
 
+macro_rules! torso_ring {
+    ($f:ident, $fl:ident, $l:ident, $bl:ident, $b:ident, $br:ident, $r:ident, $fr:ident) => {
+        [PointId::$f, PointId::$fl, PointId::$l, PointId::$bl, PointId::$b, PointId::$br, PointId::$r, PointId::$fr]
+    };
+}
+
+/// Ring nodes of the torso girths: front, front-left, left, back-left,
+/// back, back-right, right, front-right (anticlockwise seen from above).
+const NECK_RING: [PointId; 8] =
+    torso_ring!(NeckFront, NeckFrontLeft, NeckLeft, NeckBackLeft, NeckBack, NeckBackRight, NeckRight, NeckFrontRight);
+const CHEST_RING: [PointId; 8] = torso_ring!(
+    ChestFront,
+    ChestFrontLeft,
+    UnderarmLeft,
+    ChestBackLeft,
+    ChestBack,
+    ChestBackRight,
+    UnderarmRight,
+    ChestFrontRight
+);
+const BUST_RING: [PointId; 8] =
+    torso_ring!(BustFront, BustFrontLeft, BustLeft, BustBackLeft, BustBack, BustBackRight, BustRight, BustFrontRight);
+const WAIST_RING: [PointId; 8] = torso_ring!(
+    WaistFront,
+    WaistFrontLeft,
+    WaistLeft,
+    WaistBackLeft,
+    WaistBack,
+    WaistBackRight,
+    WaistRight,
+    WaistFrontRight
+);
+const HIP_RING: [PointId; 8] =
+    torso_ring!(HipFront, HipFrontLeft, HipLeft, HipBackLeft, HipBack, HipBackRight, HipRight, HipFrontRight);
+
 /// A ring of nodes on a girth: node ids, the girth, their arc parameters
 /// and the radial ease offset.
 #[derive(Debug, Clone)]
@@ -126,32 +165,20 @@ impl<'a> Builder<'a> {
         (self.draft.positions.len() - 1) as u32
     }
 
-    /// A ring on girth `curve` through the `cardinal` points (in the girth's
-    /// direction: anticlockwise seen from above), with a node midway (by
-    /// arc length) between consecutive cardinals; eased outwards by
-    /// `ease_mm / 2π`. Midway nodes are tied to the preceding cardinal.
-    /// Every ring edge gets a profile along the eased girth.
-    fn ring(&mut self, curve: CurveId, cardinal: &[PointId], ease_mm: f64) -> Result<Ring, AuthorError> {
+    /// A ring on girth `curve` with a node at each feature point of
+    /// `points` (in the girth's direction: anticlockwise seen from above),
+    /// each tied to its point and eased outwards by `ease_mm / 2π`. Every
+    /// ring edge gets a profile along the eased girth.
+    fn ring(&mut self, curve: CurveId, points: &[PointId], ease_mm: f64) -> Result<Ring, AuthorError> {
         let loop_ = self.curve(curve)?.clone();
-        let total = loop_.length();
-        let mut s = Vec::new();
-        for id in cardinal {
+        let mut params = Vec::with_capacity(points.len());
+        for id in points {
             let p = self.point(*id)?;
-            s.push(loop_.closest(p).map_or(0.0, |c| c.s));
-        }
-        let fwd = |a: f64, b: f64| (b - a).rem_euclid(total);
-        let k = s.len();
-        let mut params = Vec::with_capacity(2 * k);
-        let mut ties = Vec::with_capacity(2 * k);
-        for i in 0..k {
-            params.push(s[i]);
-            ties.push(cardinal[i]);
-            params.push((s[i] + 0.5 * fwd(s[i], s[(i + 1) % k])).rem_euclid(total));
-            ties.push(cardinal[i]);
+            params.push(loop_.closest(p).map_or(0.0, |c| c.s));
         }
         let radial = ease_mm * MM / std::f64::consts::TAU;
         let nodes: Vec<u32> =
-            params.iter().zip(&ties).map(|(&t, &tie)| self.node(eased(&loop_, t, radial), Some(tie))).collect();
+            params.iter().zip(points).map(|(&t, &tie)| self.node(eased(&loop_, t, radial), Some(tie))).collect();
         let ring = Ring { nodes, curve: loop_, params, radial };
         for i in 0..ring.nodes.len() {
             let j = (i + 1) % ring.nodes.len();
@@ -291,19 +318,24 @@ fn eased(loop_: &Polyline, s: f64, radial: f64) -> DVec3 {
 pub fn straight_skirt(body: &FeatureBody, o: &SkirtOptions) -> Result<Template, AuthorError> {
     use PointId as P;
     let mut b = Builder::new(body, o.profile_points);
-    let waist = b.ring(CurveId::Waist, &[P::WaistFront, P::WaistLeft, P::WaistBack, P::WaistRight], o.waist_ease_mm)?;
-    let hip = b.ring(CurveId::Hip, &[P::HipFront, P::HipLeft, P::HipBack, P::HipRight], o.hip_ease_mm)?;
+    let waist = b.ring(CurveId::Waist, &WAIST_RING, o.waist_ease_mm)?;
+    let hip = b.ring(CurveId::Hip, &HIP_RING, o.hip_ease_mm)?;
     let hip_c = hip.curve.centroid();
     let hem_of = |p: DVec3| -> DVec3 {
         let out = DVec3::new(p.x - hip_c.x, 0.0, p.z - hip_c.z).normalize_or_zero();
         p - DVec3::Y * o.length_below_hip_m + out * (o.hem_flare_mm * MM)
     };
+    // Hem nodes hang 35 cm below the hip line: tied to the hip's cardinal
+    // points, whose second curves (centre and side lines) run straight
+    // down, so that the long offset along t(f2) stays vertical on every body.
+    let cardinal = [P::HipFront, P::HipLeft, P::HipBack, P::HipRight];
     let hem_nodes: Vec<u32> = hip
         .nodes
         .iter()
-        .map(|&v| {
-            let (p, tie) = (b.draft.positions[v as usize], b.draft.ties[v as usize]);
-            b.node(hem_of(p), tie)
+        .enumerate()
+        .map(|(k, &v)| {
+            let p = b.draft.positions[v as usize];
+            b.node(hem_of(p), Some(cardinal[k / 2]))
         })
         .collect();
     for i in 0..8 {
@@ -314,7 +346,9 @@ pub fn straight_skirt(body: &FeatureBody, o: &SkirtOptions) -> Result<Template, 
     let hem = Ring { nodes: hem_nodes, ..hip.clone() };
     let upper = b.band(&waist, &hip);
     let lower = b.band(&hip, &hem);
-    for (col, line) in [(0, CurveId::CentreFront), (2, CurveId::SideLineLeft), (4, CurveId::CentreBack), (6, CurveId::SideLineRight)] {
+    for (col, line) in
+        [(0, CurveId::CentreFront), (2, CurveId::SideLineLeft), (4, CurveId::CentreBack), (6, CurveId::SideLineRight)]
+    {
         b.line_profile(waist.nodes[col], hip.nodes[col], line)?;
     }
     b.orient();
@@ -337,8 +371,323 @@ pub fn straight_skirt(body: &FeatureBody, o: &SkirtOptions) -> Result<Template, 
     Ok(encode(&b.draft, body)?)
 }
 
+/// Knobs of the fitted bodice.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct BodiceOptions {
+    /// Neck base ease, mm. Default 20.
+    pub neck_ease_mm: f64,
+    /// Chest (armpit level) ease, mm. Default 60.
+    pub chest_ease_mm: f64,
+    /// Bust ease, mm. Default 80.
+    pub bust_ease_mm: f64,
+    /// Waist ease, mm. Default 50.
+    pub waist_ease_mm: f64,
+    /// Armhole ease (added to the armscye girth), mm. Default 40.
+    pub armhole_ease_mm: f64,
+    /// Lift of the shoulder seam off the shoulder, mm. Default 4.
+    pub shoulder_lift_mm: f64,
+    /// Attached points per profile. Default 7.
+    pub profile_points: usize,
+}
+
+impl Default for BodiceOptions {
+    fn default() -> Self {
+        Self {
+            neck_ease_mm: 20.0,
+            chest_ease_mm: 60.0,
+            bust_ease_mm: 80.0,
+            waist_ease_mm: 50.0,
+            armhole_ease_mm: 40.0,
+            shoulder_lift_mm: 4.0,
+            profile_points: 7,
+        }
+    }
+}
+
+/// Authors the fitted bodice (a shell top to the waist): neck, chest, bust
+/// and waist rings, shoulder points, armholes following the armscyes;
+/// front and back panels; side and shoulder seams.
+pub fn fitted_bodice(body: &FeatureBody, o: &BodiceOptions) -> Result<Template, AuthorError> {
+    use PointId as P;
+    let mut b = Builder::new(body, o.profile_points);
+    let neck = b.ring(CurveId::NeckBase, &NECK_RING, o.neck_ease_mm)?;
+    let chest = b.ring(CurveId::Chest, &CHEST_RING, o.chest_ease_mm)?;
+    let bust = b.ring(CurveId::Bust, &BUST_RING, o.bust_ease_mm)?;
+    let waist = b.ring(CurveId::Waist, &WAIST_RING, o.waist_ease_mm)?;
+    let mut front = Vec::new();
+    let mut back = Vec::new();
+    let mut shoulders = Vec::new();
+    // upper torso, per side: (neck column of the side neck point, chest column of the armpit)
+    for (side, col, armscye, shoulder) in
+        [(0usize, 2usize, CurveId::ArmscyeLeft, P::ShoulderLeft), (1, 6, CurveId::ArmscyeRight, P::ShoulderRight)]
+    {
+        let sp = b.point(shoulder)?;
+        let n = b.body.points[&shoulder].frame.n;
+        let sl = b.node(sp + n * (o.shoulder_lift_mm * MM), Some(shoulder));
+        shoulders.push(sl);
+        // armhole nodes midway along the armscye, front and back of the arm
+        let loop_ = b.curve(armscye)?.clone();
+        let total = loop_.length();
+        let s_top = loop_.closest(sp).map_or(0.0, |c| c.s);
+        let s_low = loop_.cumulative()[..loop_.points.len()]
+            .iter()
+            .zip(&loop_.points)
+            .min_by(|x, y| x.1.y.total_cmp(&y.1.y))
+            .map_or(0.0, |(s, _)| *s);
+        let mid_a = (s_top + 0.5 * (s_low - s_top).rem_euclid(total)).rem_euclid(total);
+        let mid_b = (s_low + 0.5 * (s_top - s_low).rem_euclid(total)).rem_euclid(total);
+        let radial = o.armhole_ease_mm * MM / std::f64::consts::TAU;
+        let armhole = Ring { nodes: Vec::new(), curve: loop_.clone(), params: Vec::new(), radial };
+        let ease_in_plane = |s: f64| {
+            let p = loop_.point_at(s);
+            p + (p - loop_.centroid()).normalize_or_zero() * radial
+        };
+        // the arc from the top that reaches the front first
+        let a_is_front = loop_.point_at(mid_a).z > loop_.point_at(mid_b).z;
+        let (s_front, s_back) = if a_is_front { (mid_a, mid_b) } else { (mid_b, mid_a) };
+        let af = b.node(ease_in_plane(s_front), None);
+        let ab = b.node(ease_in_plane(s_back), None);
+        let ul = chest.nodes[col];
+        let ul_pos = b.draft.positions[ul as usize];
+        let arc = |b: &Builder, s0: f64, s1: f64| -> Vec<DVec3> {
+            // the shorter way round from s0 to s1
+            let fwd = (s1 - s0).rem_euclid(total);
+            let (from, to, rev) = if fwd <= total - fwd { (s0, s1, false) } else { (s1, s0, true) };
+            let mut pts: Vec<DVec3> = b
+                .ring_arc(&armhole, from, to)
+                .into_iter()
+                .map(|p| {
+                    // ring_arc eases horizontally; armholes ease in their own plane
+                    let c = loop_.closest(p).map_or(p, |c| c.point);
+                    c + (c - loop_.centroid()).normalize_or_zero() * radial
+                })
+                .collect();
+            if rev {
+                pts.reverse();
+            }
+            pts
+        };
+        let p_top = arc(&b, s_top, s_front);
+        b.draft.profiles.push(((sl, af), p_top));
+        let mut p_low = arc(&b, s_front, s_low);
+        p_low.push(ul_pos);
+        b.draft.profiles.push(((af, ul), p_low));
+        let mut p_low_b = arc(&b, s_low, s_back);
+        p_low_b.insert(0, ul_pos);
+        b.draft.profiles.push(((ul, ab), p_low_b));
+        let p_top_b = arc(&b, s_back, s_top);
+        b.draft.profiles.push(((ab, sl), p_top_b));
+        // faces; `f`/`k` are the neck and chest nodes on the front and back side of this armhole
+        let (nf, nk) = if side == 0 { (neck.nodes[1], chest.nodes[1]) } else { (neck.nodes[7], chest.nodes[7]) };
+        let (nb, kb) = if side == 0 { (neck.nodes[3], chest.nodes[3]) } else { (neck.nodes[5], chest.nodes[5]) };
+        let nl = neck.nodes[col];
+        front.extend([b.tri(nf, nl, sl), b.tri(nf, sl, af), b.tri(nf, af, nk), b.tri(nk, af, ul)]);
+        back.extend([b.tri(nb, nl, sl), b.tri(nb, sl, ab), b.tri(nb, ab, kb), b.tri(kb, ab, ul)]);
+        b.line_profile(nl, sl, if side == 0 { CurveId::ShoulderLineLeft } else { CurveId::ShoulderLineRight })?;
+    }
+    // centre front/back quads between the neck and chest rings
+    let (n, k) = (&neck.nodes, &chest.nodes);
+    front.extend(b.quad(n[7], n[0], k[0], k[7]));
+    front.extend(b.quad(n[0], n[1], k[1], k[0]));
+    back.extend(b.quad(n[3], n[4], k[4], k[3]));
+    back.extend(b.quad(n[4], n[5], k[5], k[4]));
+    let upper = b.band(&chest, &bust);
+    let lower = b.band(&bust, &waist);
+    for c in [6usize, 7, 0, 1] {
+        front.extend(upper[c].into_iter().chain(lower[c]));
+    }
+    for c in [2usize, 3, 4, 5] {
+        back.extend(upper[c].into_iter().chain(lower[c]));
+    }
+    for (col, line) in [(0usize, CurveId::CentreFront), (4, CurveId::CentreBack)] {
+        b.line_profile(neck.nodes[col], chest.nodes[col], line)?;
+        b.line_profile(chest.nodes[col], bust.nodes[col], line)?;
+        b.line_profile(bust.nodes[col], waist.nodes[col], line)?;
+    }
+    for (col, line) in [(2usize, CurveId::SideLineLeft), (6, CurveId::SideLineRight)] {
+        b.line_profile(chest.nodes[col], bust.nodes[col], line)?;
+        b.line_profile(bust.nodes[col], waist.nodes[col], line)?;
+    }
+    b.orient();
+    b.panel("front", front, (neck.nodes[0], waist.nodes[0]));
+    b.panel("back", back, (neck.nodes[4], waist.nodes[4]));
+    b.seam("side_left", "front", "back", vec![chest.nodes[2], bust.nodes[2], waist.nodes[2]]);
+    b.seam("side_right", "back", "front", vec![chest.nodes[6], bust.nodes[6], waist.nodes[6]]);
+    b.seam("shoulder_left", "front", "back", vec![neck.nodes[2], shoulders[0]]);
+    b.seam("shoulder_right", "back", "front", vec![neck.nodes[6], shoulders[1]]);
+    b.draft.notches = vec![("bust".into(), bust.nodes[2]), ("bust".into(), bust.nodes[6])];
+    b.draft.name = "fitted-bodice".into();
+    b.draft.version = 1;
+    b.draft.description = "Fitted bodice (shell top) to the waist: neckline, shoulders, armholes, bust and waist; \
+                           front and back panels joined by side and shoulder seams."
+        .into();
+    b.draft.ease_mm = BTreeMap::from([
+        ("neck_base".to_owned(), o.neck_ease_mm),
+        ("chest".to_owned(), o.chest_ease_mm),
+        ("bust".to_owned(), o.bust_ease_mm),
+        ("waist".to_owned(), o.waist_ease_mm),
+        ("armscye".to_owned(), o.armhole_ease_mm),
+    ]);
+    Ok(encode(&b.draft, body)?)
+}
+
+/// Knobs of the trousers.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct TrouserOptions {
+    /// Waist ease, mm. Default 10.
+    pub waist_ease_mm: f64,
+    /// Hip ease, mm. Default 50.
+    pub hip_ease_mm: f64,
+    /// Thigh ease, mm. Default 70.
+    pub thigh_ease_mm: f64,
+    /// Knee ease, mm. Default 110.
+    pub knee_ease_mm: f64,
+    /// Hem ease over the ankle girth, mm. Default 200.
+    pub hem_ease_mm: f64,
+    /// Crotch depth ease: how far the crotch node sits below the crotch point, mm. Default 15.
+    pub crotch_drop_mm: f64,
+    /// Attached points per profile. Default 7.
+    pub profile_points: usize,
+}
+
+impl Default for TrouserOptions {
+    fn default() -> Self {
+        Self {
+            waist_ease_mm: 10.0,
+            hip_ease_mm: 50.0,
+            thigh_ease_mm: 70.0,
+            knee_ease_mm: 110.0,
+            hem_ease_mm: 200.0,
+            crotch_drop_mm: 15.0,
+            profile_points: 7,
+        }
+    }
+}
+
+/// Authors straight trousers: waist and hip rings, crotch node, thigh,
+/// knee and hem rings per leg; front and back panels per leg; side,
+/// inside-leg and crotch seams.
+pub fn trousers(body: &FeatureBody, o: &TrouserOptions) -> Result<Template, AuthorError> {
+    use PointId as P;
+    let mut b = Builder::new(body, o.profile_points);
+    let waist = b.ring(CurveId::Waist, &WAIST_RING, o.waist_ease_mm)?;
+    let hip = b.ring(CurveId::Hip, &HIP_RING, o.hip_ease_mm)?;
+    let cp = b.point(P::Crotch)?;
+    let c = b.node(cp - DVec3::Y * (o.crotch_drop_mm * MM), Some(P::Crotch));
+    let torso = b.band(&waist, &hip);
+    let h = hip.nodes.clone();
+    let mut panels: BTreeMap<&str, Vec<usize>> = BTreeMap::new();
+    let mut legs = Vec::new();
+    for (side, name_f, name_b) in [(0usize, "left_front", "left_back"), (1, "right_front", "right_back")] {
+        // rings from the outer point, anticlockwise seen from above
+        let (thigh, knee, ankle) = if side == 0 {
+            (
+                (CurveId::ThighLeft, [P::ThighLeft, P::ThighLeftBack, P::ThighLeftInner, P::ThighLeftFront]),
+                (CurveId::KneeLeft, [P::KneeLeft, P::KneeLeftBack, P::KneeLeftInner, P::KneeLeftFront]),
+                (CurveId::AnkleLeft, [P::AnkleLeft, P::AnkleLeftBack, P::AnkleLeftInner, P::AnkleLeftFront]),
+            )
+        } else {
+            (
+                (CurveId::ThighRight, [P::ThighRight, P::ThighRightFront, P::ThighRightInner, P::ThighRightBack]),
+                (CurveId::KneeRight, [P::KneeRight, P::KneeRightFront, P::KneeRightInner, P::KneeRightBack]),
+                (CurveId::AnkleRight, [P::AnkleRight, P::AnkleRightFront, P::AnkleRightInner, P::AnkleRightBack]),
+            )
+        };
+        let t = b.ring(thigh.0, &thigh.1, o.thigh_ease_mm)?;
+        let k = b.ring(knee.0, &knee.1, o.knee_ease_mm)?;
+        let a = b.ring(ankle.0, &ankle.1, o.hem_ease_mm)?;
+        // ring order from the outer point: left leg outer, back, inner, front; right leg outer, front, inner, back
+        let (to, ti) = (t.nodes[0], t.nodes[2]);
+        let (tf, tb) = if side == 0 { (t.nodes[3], t.nodes[1]) } else { (t.nodes[1], t.nodes[3]) };
+        let (front_cols, back_cols): ([usize; 2], [usize; 2]) =
+            if side == 0 { ([2, 3], [0, 1]) } else { ([0, 1], [2, 3]) };
+        let upper = b.band(&t, &k);
+        let lower = b.band(&k, &a);
+        let mut f = Vec::new();
+        let mut bk = Vec::new();
+        // junction between the hip ring and the thigh ring
+        let (hf, hfs, hs, hbs, hb) =
+            if side == 0 { (h[0], h[1], h[2], h[3], h[4]) } else { (h[0], h[7], h[6], h[5], h[4]) };
+        f.extend(b.quad(hf, hfs, tf, c));
+        f.extend(b.quad(hfs, hs, to, tf));
+        f.push(b.tri(c, tf, ti));
+        bk.extend(b.quad(hs, hbs, tb, to));
+        bk.extend(b.quad(hbs, hb, c, tb));
+        bk.push(b.tri(c, ti, tb));
+        for col in front_cols {
+            f.extend(upper[col].into_iter().chain(lower[col]));
+        }
+        for col in back_cols {
+            bk.extend(upper[col].into_iter().chain(lower[col]));
+        }
+        let torso_f: [usize; 2] = if side == 0 { [0, 1] } else { [6, 7] };
+        let torso_b: [usize; 2] = if side == 0 { [2, 3] } else { [4, 5] };
+        f.extend(torso_f.iter().flat_map(|&i| torso[i]));
+        bk.extend(torso_b.iter().flat_map(|&i| torso[i]));
+        let side_line = if side == 0 { CurveId::SideLineLeft } else { CurveId::SideLineRight };
+        b.line_profile(waist.nodes[if side == 0 { 2 } else { 6 }], hs, side_line)?;
+        b.line_profile(hs, to, side_line)?;
+        b.line_profile(to, k.nodes[0], side_line)?;
+        b.line_profile(k.nodes[0], a.nodes[0], side_line)?;
+        panels.insert(name_f, f);
+        panels.insert(name_b, bk);
+        legs.push((t, k, a, to, ti, tf));
+    }
+    b.line_profile(waist.nodes[0], h[0], CurveId::CentreFront)?;
+    b.line_profile(h[0], c, CurveId::CentreFront)?;
+    b.line_profile(waist.nodes[4], h[4], CurveId::CentreBack)?;
+    b.line_profile(h[4], c, CurveId::CentreBack)?;
+    b.orient();
+    for (side, (_, k, a, _, _, _)) in legs.iter().enumerate() {
+        let (nf, nb) = if side == 0 { ("left_front", "left_back") } else { ("right_front", "right_back") };
+        let (kf, af, kb, ab) = if side == 0 {
+            (k.nodes[3], a.nodes[3], k.nodes[1], a.nodes[1])
+        } else {
+            (k.nodes[1], a.nodes[1], k.nodes[3], a.nodes[3])
+        };
+        b.panel(nf, panels[nf].clone(), (kf, af));
+        b.panel(nb, panels[nb].clone(), (kb, ab));
+    }
+    let (l, r) = (&legs[0], &legs[1]);
+    b.seam("side_left", "left_front", "left_back", vec![waist.nodes[2], h[2], l.3, l.1.nodes[0], l.2.nodes[0]]);
+    b.seam("side_right", "right_back", "right_front", vec![waist.nodes[6], h[6], r.3, r.1.nodes[0], r.2.nodes[0]]);
+    b.seam("inseam_left", "left_back", "left_front", vec![c, l.4, l.1.nodes[2], l.2.nodes[2]]);
+    b.seam("inseam_right", "right_front", "right_back", vec![c, r.4, r.1.nodes[2], r.2.nodes[2]]);
+    b.seam("crotch_front", "right_front", "left_front", vec![waist.nodes[0], h[0], c]);
+    b.seam("crotch_back", "left_back", "right_back", vec![waist.nodes[4], h[4], c]);
+    b.draft.notches = vec![
+        ("hip".into(), h[2]),
+        ("hip".into(), h[6]),
+        ("knee".into(), l.1.nodes[0]),
+        ("knee".into(), l.1.nodes[2]),
+        ("knee".into(), r.1.nodes[0]),
+        ("knee".into(), r.1.nodes[2]),
+        ("crotch".into(), c),
+    ];
+    b.draft.name = "trousers".into();
+    b.draft.version = 1;
+    b.draft.description = "Straight-leg trousers: waist, hip, crotch, thigh, knee and hem; front and back panels per \
+                           leg joined by side, inside-leg and crotch seams."
+        .into();
+    b.draft.ease_mm = BTreeMap::from([
+        ("waist".to_owned(), o.waist_ease_mm),
+        ("hip".to_owned(), o.hip_ease_mm),
+        ("thigh".to_owned(), o.thigh_ease_mm),
+        ("knee".to_owned(), o.knee_ease_mm),
+        ("hem_over_ankle".to_owned(), o.hem_ease_mm),
+        ("crotch_drop".to_owned(), o.crotch_drop_mm),
+    ]);
+    Ok(encode(&b.draft, body)?)
+}
+
 /// Authors every built-in template on the reference body.
 pub fn author_all() -> Result<Vec<Template>, AuthorError> {
     let body = reference_body()?;
-    Ok(vec![straight_skirt(&body, &SkirtOptions::default())?])
+    Ok(vec![
+        straight_skirt(&body, &SkirtOptions::default())?,
+        trousers(&body, &TrouserOptions::default())?,
+        fitted_bodice(&body, &BodiceOptions::default())?,
+    ])
 }
