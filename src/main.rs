@@ -95,11 +95,13 @@ fn main() -> ExitCode {
 fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
     match cli.command {
         Command::Serve { addr } => {
+            let state = grade3d::service::AppState::with_builtin_templates()?;
+            tracing::info!(templates = state.templates.len(), "template library loaded");
             let rt = tokio::runtime::Runtime::new()?;
             rt.block_on(async move {
                 let listener = tokio::net::TcpListener::bind(addr).await?;
                 tracing::info!(%addr, "listening");
-                axum::serve(listener, grade3d::service::app(grade3d::service::AppState::default()))
+                axum::serve(listener, grade3d::service::app(state))
                     .with_graceful_shutdown(async {
                         let _ = tokio::signal::ctrl_c().await;
                     })
