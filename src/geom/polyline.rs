@@ -297,23 +297,41 @@ impl Polyline {
     pub fn crossing(&self, other: &Polyline, near: DVec3, gap_tolerance: f64) -> Option<Crossing> {
         let ca = self.cumulative();
         let cb = other.cumulative();
+        // Segment bounding boxes of `other`, to skip pairs that cannot be
+        // within the tolerance of the smallest gap found so far.
+        let boxes: Vec<(DVec3, DVec3)> = (0..other.segment_count())
+            .map(|j| {
+                let (q0, q1) = other.segment(j);
+                (q0.min(q1), q0.max(q1))
+            })
+            .collect();
+        let mut min_gap = f64::INFINITY;
         let mut cands: Vec<Crossing> = Vec::new();
         for i in 0..self.segment_count() {
             let (p0, p1) = self.segment(i);
-            for j in 0..other.segment_count() {
+            let (lo, hi) = (p0.min(p1), p0.max(p1));
+            for (j, (blo, bhi)) in boxes.iter().enumerate() {
+                let sep = (*blo - hi).max(lo - *bhi).max(DVec3::ZERO).length();
+                if sep > min_gap + gap_tolerance {
+                    continue;
+                }
                 let (q0, q1) = other.segment(j);
                 let (s, t) = segment_segment(p0, p1, q0, q1);
                 let a = p0.lerp(p1, s);
                 let b = q0.lerp(q1, t);
+                let gap = a.distance(b);
+                if gap > min_gap + gap_tolerance {
+                    continue;
+                }
+                min_gap = min_gap.min(gap);
                 cands.push(Crossing {
                     s_a: ca[i] + s * (ca[i + 1] - ca[i]),
                     s_b: cb[j] + t * (cb[j + 1] - cb[j]),
                     point: 0.5 * (a + b),
-                    gap: a.distance(b),
+                    gap,
                 });
             }
         }
-        let min_gap = cands.iter().map(|c| c.gap).fold(f64::INFINITY, f64::min);
         cands
             .into_iter()
             .filter(|c| c.gap <= min_gap + gap_tolerance)
