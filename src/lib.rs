@@ -6,6 +6,7 @@
 //! "Feature based 3D garment design through 2D sketches").
 
 pub mod body;
+pub mod collide;
 pub mod geom;
 pub mod io;
 pub mod mannequin;

@@ -1,0 +1,223 @@
+//! Depth maps of a body and the image-based inside test (seed 000 §5.4,
+//! Eq. (13)).
+//!
+//! A [`View`] looks at the body orthographically along its depth axis `d`
+//! (towards the camera), with `u` to the right and `w` up on the image.
+//! Rendering it twice, once keeping the nearest surface (depth test
+//! *Less*) and once the farthest (*Greater*, cleared to 0), gives for every
+//! pixel `(X, Y)` the interval `[back(X, Y), front(X, Y)]` of the body
+//! along `d` — seed 000's front and back depth buffers. A point `p` is
+//! inside the body by Eq. (13) when
+//!
+//! `back(X, Y) ≤ p·d ≤ front(X, Y)` at its pixel,
+//!
+//! and, with several views, when that holds in **every** view (each view
+//! only over-estimates the body: concavities hidden along its axis read as
+//! inside; intersecting views removes most of them).
+//!
+//! This module is pure data: the maps arrive from the renderer
+//! ([`super::render`]) or from tests. Empty pixels hold NaN.
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+/// An orthographic view of the body.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct View {
+    /// Image right, unit.
+    pub u: DVec3,
+    /// Image up, unit.
+    pub w: DVec3,
+    /// Depth axis, towards the camera, unit (`u × w`).
+    pub d: DVec3,
+    /// World range along `u` covered by the image, m.
+    pub u_range: [f64; 2],
+    /// World range along `w`, m.
+    pub w_range: [f64; 2],
+    /// World range along `d` mapped to depth [1, 0], m.
+    pub d_range: [f64; 2],
+}
+
+/// Which views to render.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ViewSet {
+    /// Front and back (seed 000): one view along +Z.
+    FrontBack,
+    /// Front/back and left/right: views along +Z and +X.
+    FrontBackSides,
+}
+
+impl View {
+    /// The views of a body with bounding box `[lo, hi]`, padded by `pad`.
+    pub fn set(set: ViewSet, lo: DVec3, hi: DVec3, pad: f64) -> Vec<View> {
+        let (lo, hi) = (lo - DVec3::splat(pad), hi + DVec3::splat(pad));
+        let along_z = View {
+            u: DVec3::X,
+            w: DVec3::Y,
+            d: DVec3::Z,
+            u_range: [lo.x, hi.x],
+            w_range: [lo.y, hi.y],
+            d_range: [lo.z, hi.z],
+        };
+        let along_x = View {
+            u: DVec3::NEG_Z,
+            w: DVec3::Y,
+            d: DVec3::X,
+            u_range: [-hi.z, -lo.z],
+            w_range: [lo.y, hi.y],
+            d_range: [lo.x, hi.x],
+        };
+        match set {
+            ViewSet::FrontBack => vec![along_z],
+            ViewSet::FrontBackSides => vec![along_z, along_x],
+        }
+    }
+
+    /// Clip-space position of a world point: x, y in [−1, 1], depth in
+    /// [0, 1] with 0 nearest the camera (largest `p·d`).
+    pub fn clip(&self, p: DVec3) -> [f32; 3] {
+        let x = 2.0 * (p.dot(self.u) - self.u_range[0]) / (self.u_range[1] - self.u_range[0]) - 1.0;
+        let y = 2.0 * (p.dot(self.w) - self.w_range[0]) / (self.w_range[1] - self.w_range[0]) - 1.0;
+        let z = (self.d_range[1] - p.dot(self.d)) / (self.d_range[1] - self.d_range[0]);
+        [x as f32, y as f32, z as f32]
+    }
+
+    /// World coordinate along `d` of a depth value in [0, 1].
+    pub fn depth_to_world(&self, z: f64) -> f64 {
+        self.d_range[1] - z * (self.d_range[1] - self.d_range[0])
+    }
+}
+
+/// Front and back depth maps (and normals) of one view.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DepthMap {
+    /// The view.
+    pub view: View,
+    /// Image width, pixels.
+    pub width: u32,
+    /// Image height, pixels.
+    pub height: u32,
+    /// Nearest surface along `d` per pixel (world coordinate `p·d`, m); NaN where empty.
+    pub front: Vec<f32>,
+    /// Farthest surface along `d`; NaN where empty.
+    pub back: Vec<f32>,
+    /// Outward unit normal of the nearest surface per pixel.
+    pub front_normal: Vec<[f32; 3]>,
+    /// Outward unit normal of the farthest surface.
+    pub back_normal: Vec<[f32; 3]>,
+}
+
+/// What the inside test found for a point in one view.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Probe {
+    /// Inside the interval of its pixel.
+    pub inside: bool,
+    /// Distance to move along the nearer face's normal to leave the body, m.
+    pub escape: f64,
+    /// That normal.
+    pub normal: DVec3,
+}
+
+impl DepthMap {
+    /// The pixel of a point, row 0 at the top of the image; `None` outside the image.
+    pub fn pixel(&self, p: DVec3) -> Option<usize> {
+        let v = &self.view;
+        let fx = (p.dot(v.u) - v.u_range[0]) / (v.u_range[1] - v.u_range[0]);
+        let fy = (v.w_range[1] - p.dot(v.w)) / (v.w_range[1] - v.w_range[0]);
+        if !(0.0..1.0).contains(&fx) || !(0.0..1.0).contains(&fy) {
+            return None;
+        }
+        let x = (fx * f64::from(self.width)) as usize;
+        let y = (fy * f64::from(self.height)) as usize;
+        Some(y * self.width as usize + x)
+    }
+
+    /// Eq. (13) for one view.
+    pub fn probe(&self, p: DVec3) -> Probe {
+        let outside = Probe { inside: false, escape: 0.0, normal: DVec3::ZERO };
+        let Some(i) = self.pixel(p) else { return outside };
+        let (f, b) = (f64::from(self.front[i]), f64::from(self.back[i]));
+        if !f.is_finite() || !b.is_finite() {
+            return outside;
+        }
+        let z = p.dot(self.view.d);
+        if z < b || z > f {
+            return outside;
+        }
+        let to_front = f - z;
+        let to_back = z - b;
+        let (escape, n) =
+            if to_front <= to_back { (to_front, self.front_normal[i]) } else { (to_back, self.back_normal[i]) };
+        let n = DVec3::new(f64::from(n[0]), f64::from(n[1]), f64::from(n[2]));
+        Probe { inside: true, escape, normal: n.normalize_or_zero() }
+    }
+}
+
+/// Eq. (13) over several views: inside iff inside in every view. Returns
+/// the probe with the smallest escape (the way out).
+pub fn inside(maps: &[DepthMap], p: DVec3) -> Option<Probe> {
+    let mut best: Option<Probe> = None;
+    for m in maps {
+        let pr = m.probe(p);
+        if !pr.inside {
+            return None;
+        }
+        if best.is_none_or(|b| pr.escape < b.escape) {
+            best = Some(pr);
+        }
+    }
+    best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Analytic depth maps of a sphere.
+    fn sphere_map(r: f64, n: u32, view: View) -> DepthMap {
+        let mut m = DepthMap {
+            view,
+            width: n,
+            height: n,
+            front: vec![f32::NAN; (n * n) as usize],
+            back: vec![f32::NAN; (n * n) as usize],
+            front_normal: vec![[0.0; 3]; (n * n) as usize],
+            back_normal: vec![[0.0; 3]; (n * n) as usize],
+        };
+        for y in 0..n {
+            for x in 0..n {
+                let a = view.u_range[0] + (f64::from(x) + 0.5) / f64::from(n) * (view.u_range[1] - view.u_range[0]);
+                let b = view.w_range[1] - (f64::from(y) + 0.5) / f64::from(n) * (view.w_range[1] - view.w_range[0]);
+                let h2 = r * r - a * a - b * b;
+                if h2 >= 0.0 {
+                    let i = (y * n + x) as usize;
+                    let h = h2.sqrt();
+                    m.front[i] = h as f32;
+                    m.back[i] = -h as f32;
+                    let pf = view.u * a + view.w * b + view.d * h;
+                    let pb = view.u * a + view.w * b - view.d * h;
+                    m.front_normal[i] = (pf / r).as_vec3().to_array();
+                    m.back_normal[i] = (pb / r).as_vec3().to_array();
+                }
+            }
+        }
+        m
+    }
+
+    #[test]
+    fn sphere_inside_test_and_escape() {
+        let views = View::set(ViewSet::FrontBackSides, DVec3::splat(-1.0), DVec3::splat(1.0), 0.1);
+        let maps: Vec<DepthMap> = views.iter().map(|v| sphere_map(1.0, 512, *v)).collect();
+        let p = DVec3::new(0.1, 0.2, 0.85);
+        let pr = inside(&maps, p).unwrap();
+        assert!(pr.escape > 0.0 && pr.escape < 0.2);
+        assert!(pr.normal.dot(p.normalize()) > 0.9);
+        assert!(inside(&maps, DVec3::new(0.0, 0.0, 1.05)).is_none());
+        assert!(inside(&maps, DVec3::new(0.9, 0.9, 0.0)).is_none());
+        // clip space: nearest point has depth 0
+        let v = views[0];
+        assert!((v.clip(DVec3::new(0.0, 0.0, 1.1))[2]).abs() < 1e-6);
+        assert!((v.depth_to_world(0.5) - 0.0).abs() < 1e-12);
+    }
+}

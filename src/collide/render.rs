@@ -1,0 +1,385 @@
+//! Offscreen depth maps of a body with wgpu — the one module of the crate
+//! that touches the GPU.
+//!
+//! One [`GpuContext`] per process (adapter, device, queue, the two
+//! pipelines) is shared by every request; [`GpuContext::render`] turns a
+//! body mesh into the [`DepthMap`]s of its views. Per view, the mesh is
+//! drawn twice into two `Rgba8Unorm` targets: depth packed into 24 bits
+//! (RGB) and the vertex normal (`n·½ + ½`). The first pass keeps the
+//! nearest surface (depth test *Less*, cleared to 1), the second the
+//! farthest (*Greater*, cleared to 0) — no float blending, no float render
+//! targets, no depth-texture copies, so it runs under the GL backend's
+//! downlevel limits (llvmpipe) as well as on Vulkan (lavapipe, GPUs).
+//! Rows of the read-back are padded to 256 bytes.
+//!
+//! Backend: `WGPU_BACKEND` (`gl`, `vulkan`, …) or every available one.
+//! Failure modes: no adapter, device request refused, read-back failure —
+//! each a [`RenderError`].
+
+use std::sync::mpsc;
+
+use bytemuck::{Pod, Zeroable};
+use glam::DVec3;
+use wgpu::util::DeviceExt;
+
+use super::depth::{DepthMap, View, ViewSet};
+use crate::geom::mesh::TriMesh;
+
+/// Knobs of the renderer.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct RenderOptions {
+    /// Depth-map resolution, pixels per side. Default 512.
+    pub resolution: u32,
+    /// Which views. Default front/back and left/right.
+    pub views: ViewSet,
+    /// Margin around the body's bounding box, mm. Default 20.
+    pub padding_mm: f64,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        Self { resolution: 512, views: ViewSet::FrontBackSides, padding_mm: 20.0 }
+    }
+}
+
+/// Why rendering failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RenderError {
+    /// No adapter for the requested backends.
+    #[error(
+        "no graphics adapter available ({0}); install Mesa (llvmpipe for GL, lavapipe for Vulkan) or set WGPU_BACKEND"
+    )]
+    NoAdapter(String),
+    /// The device request was refused.
+    #[error("graphics device request refused: {0}")]
+    Device(String),
+    /// Resolution outside what the device allows.
+    #[error("depth-map resolution {requested} is outside 16..={max}")]
+    Resolution {
+        /// Requested.
+        requested: u32,
+        /// Device maximum.
+        max: u32,
+    },
+    /// Reading the maps back failed.
+    #[error("depth-map read-back failed: {0}")]
+    Readback(String),
+}
+
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+struct Vertex {
+    clip: [f32; 3],
+    normal: [f32; 3],
+}
+
+const SHADER: &str = r#"
+struct VOut {
+    @builtin(position) pos: vec4<f32>,
+    @location(0) n: vec3<f32>,
+};
+
+@vertex
+fn vs(@location(0) p: vec3<f32>, @location(1) n: vec3<f32>) -> VOut {
+    var o: VOut;
+    o.pos = vec4<f32>(p.x, p.y, p.z, 1.0);
+    o.n = n;
+    return o;
+}
+
+struct FOut {
+    @location(0) depth: vec4<f32>,
+    @location(1) normal: vec4<f32>,
+};
+
+@fragment
+fn fs(i: VOut) -> FOut {
+    let d = u32(clamp(i.pos.z, 0.0, 1.0) * 16777215.0);
+    var o: FOut;
+    o.depth = vec4<f32>(f32((d >> 16u) & 255u), f32((d >> 8u) & 255u), f32(d & 255u), 255.0) / 255.0;
+    o.normal = vec4<f32>(normalize(i.n) * 0.5 + vec3<f32>(0.5), 1.0);
+    return o;
+}
+"#;
+
+const COLOR: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+/// Largest 24-bit depth code.
+const DEPTH_CODES: f64 = 16_777_215.0;
+
+/// The process-wide GPU context.
+#[derive(Debug)]
+pub struct GpuContext {
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    info: wgpu::AdapterInfo,
+    nearest: wgpu::RenderPipeline,
+    farthest: wgpu::RenderPipeline,
+    max_dimension: u32,
+}
+
+impl GpuContext {
+    /// Opens an adapter (backend from `WGPU_BACKEND`, else any) and builds the pipelines.
+    pub fn new() -> Result<Self, RenderError> {
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            ..Default::default()
+        }))
+        .map_err(|e| RenderError::NoAdapter(e.to_string()))?;
+        let info = adapter.get_info();
+        let limits = wgpu::Limits::downlevel_webgl2_defaults().using_resolution(adapter.limits());
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("grade3d depth maps"),
+            required_limits: limits.clone(),
+            ..Default::default()
+        }))
+        .map_err(|e| RenderError::Device(e.to_string()))?;
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("grade3d depth shader"),
+            source: wgpu::ShaderSource::Wgsl(SHADER.into()),
+        });
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("grade3d depth pipeline layout"),
+            bind_group_layouts: &[],
+            immediate_size: 0,
+        });
+        let pipeline = |label: &str, compare: wgpu::CompareFunction| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(label),
+                layout: Some(&layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs"),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(wgpu::VertexBufferLayout {
+                        array_stride: std::mem::size_of::<Vertex>() as u64,
+                        step_mode: wgpu::VertexStepMode::Vertex,
+                        attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3],
+                    })],
+                },
+                primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: DEPTH,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(compare),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs"),
+                    compilation_options: Default::default(),
+                    targets: &[
+                        Some(wgpu::ColorTargetState { format: COLOR, blend: None, write_mask: wgpu::ColorWrites::ALL }),
+                        Some(wgpu::ColorTargetState { format: COLOR, blend: None, write_mask: wgpu::ColorWrites::ALL }),
+                    ],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let nearest = pipeline("grade3d nearest-surface pipeline", wgpu::CompareFunction::Less);
+        let farthest = pipeline("grade3d farthest-surface pipeline", wgpu::CompareFunction::Greater);
+        Ok(Self { device, queue, info, nearest, farthest, max_dimension: limits.max_texture_dimension_2d })
+    }
+
+    /// The adapter in use (for logs and reports).
+    pub fn adapter(&self) -> &wgpu::AdapterInfo {
+        &self.info
+    }
+
+    /// The depth maps of `mesh` for the configured views.
+    pub fn render(&self, mesh: &TriMesh, opts: &RenderOptions) -> Result<Vec<DepthMap>, RenderError> {
+        let n = opts.resolution;
+        if !(16..=self.max_dimension).contains(&n) {
+            return Err(RenderError::Resolution { requested: n, max: self.max_dimension });
+        }
+        let bb = mesh.aabb();
+        let views = View::set(opts.views, bb.min, bb.max, opts.padding_mm * 1e-3);
+        views.iter().map(|v| self.render_view(mesh, v, n)).collect()
+    }
+
+    fn render_view(&self, mesh: &TriMesh, view: &View, n: u32) -> Result<DepthMap, RenderError> {
+        let normals = mesh.vertex_normals();
+        let vertices: Vec<Vertex> = mesh
+            .positions()
+            .iter()
+            .zip(&normals)
+            .map(|(p, nn)| Vertex { clip: view.clip(*p), normal: nn.as_vec3().to_array() })
+            .collect();
+        let indices: Vec<u32> = mesh.triangles().iter().flat_map(|t| t.map(|v| v.0)).collect();
+        let vbuf = self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("grade3d body vertices"),
+            contents: bytemuck::cast_slice(&vertices),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let ibuf = self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("grade3d body indices"),
+            contents: bytemuck::cast_slice(&indices),
+            usage: wgpu::BufferUsages::INDEX,
+        });
+        let extent = wgpu::Extent3d { width: n, height: n, depth_or_array_layers: 1 };
+        let texture = |label: &str, format: wgpu::TextureFormat, usage: wgpu::TextureUsages| {
+            self.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: extent,
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats: &[],
+            })
+        };
+        let color_usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
+        let padded_row = (4 * n).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+        let mut results = Vec::new();
+        for (pass, pipeline, clear_depth) in [("nearest", &self.nearest, 1.0f32), ("farthest", &self.farthest, 0.0)] {
+            let depth_tex =
+                texture(&format!("grade3d {pass} depth buffer"), DEPTH, wgpu::TextureUsages::RENDER_ATTACHMENT);
+            let packed = texture(&format!("grade3d {pass} packed depth"), COLOR, color_usage);
+            let normal = texture(&format!("grade3d {pass} normals"), COLOR, color_usage);
+            let views = [&packed, &normal].map(|t| t.create_view(&Default::default()));
+            let depth_view = depth_tex.create_view(&Default::default());
+            let mut enc = self
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("grade3d depth-map encoder") });
+            {
+                let attach = |v| {
+                    Some(wgpu::RenderPassColorAttachment {
+                        view: v,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })
+                };
+                let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("grade3d depth-map pass"),
+                    color_attachments: &[attach(&views[0]), attach(&views[1])],
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: &depth_view,
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(clear_depth),
+                            store: wgpu::StoreOp::Store,
+                        }),
+                        stencil_ops: None,
+                    }),
+                    ..Default::default()
+                });
+                rp.set_pipeline(pipeline);
+                rp.set_vertex_buffer(0, vbuf.slice(..));
+                rp.set_index_buffer(ibuf.slice(..), wgpu::IndexFormat::Uint32);
+                rp.draw_indexed(0..indices.len() as u32, 0, 0..1);
+            }
+            let mut bufs = Vec::new();
+            for (t, what) in [(&packed, "depth"), (&normal, "normal")] {
+                let buf = self.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(&format!("grade3d {pass} {what} read-back")),
+                    size: u64::from(padded_row) * u64::from(n),
+                    usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                    mapped_at_creation: false,
+                });
+                enc.copy_texture_to_buffer(
+                    t.as_image_copy(),
+                    wgpu::TexelCopyBufferInfo {
+                        buffer: &buf,
+                        layout: wgpu::TexelCopyBufferLayout {
+                            offset: 0,
+                            bytes_per_row: Some(padded_row),
+                            rows_per_image: Some(n),
+                        },
+                    },
+                    extent,
+                );
+                bufs.push(buf);
+            }
+            self.queue.submit([enc.finish()]);
+            let mut out = Vec::new();
+            for buf in &bufs {
+                out.push(self.read(buf, n, padded_row)?);
+            }
+            results.push(out);
+        }
+        let px = (n * n) as usize;
+        let mut map = DepthMap {
+            view: *view,
+            width: n,
+            height: n,
+            front: vec![f32::NAN; px],
+            back: vec![f32::NAN; px],
+            front_normal: vec![[0.0; 3]; px],
+            back_normal: vec![[0.0; 3]; px],
+        };
+        for (k, pass) in results.iter().enumerate() {
+            let (depth, normal) = (&pass[0], &pass[1]);
+            for i in 0..px {
+                let c = &depth[4 * i..4 * i + 4];
+                if c[3] == 0 {
+                    continue;
+                }
+                let code = (u32::from(c[0]) << 16) | (u32::from(c[1]) << 8) | u32::from(c[2]);
+                let world = view.depth_to_world(f64::from(code) / DEPTH_CODES) as f32;
+                let nn = &normal[4 * i..4 * i + 3];
+                let dec = |b: u8| f32::from(b) / 255.0 * 2.0 - 1.0;
+                let nv = [dec(nn[0]), dec(nn[1]), dec(nn[2])];
+                if k == 0 {
+                    map.front[i] = world;
+                    map.front_normal[i] = nv;
+                } else {
+                    map.back[i] = world;
+                    map.back_normal[i] = nv;
+                }
+            }
+        }
+        Ok(map)
+    }
+
+    /// Maps a read-back buffer and strips the row padding.
+    fn read(&self, buf: &wgpu::Buffer, n: u32, padded_row: u32) -> Result<Vec<u8>, RenderError> {
+        let slice = buf.slice(..);
+        let (tx, rx) = mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        self.device
+            .poll(wgpu::PollType::Wait { submission_index: None, timeout: None })
+            .map_err(|e| RenderError::Readback(e.to_string()))?;
+        rx.recv()
+            .map_err(|e| RenderError::Readback(e.to_string()))?
+            .map_err(|e| RenderError::Readback(e.to_string()))?;
+        let data = slice.get_mapped_range().map_err(|e| RenderError::Readback(e.to_string()))?;
+        let row = (4 * n) as usize;
+        let mut out = Vec::with_capacity(row * n as usize);
+        for y in 0..n as usize {
+            let start = y * padded_row as usize;
+            out.extend_from_slice(&data[start..start + row]);
+        }
+        drop(data);
+        buf.unmap();
+        Ok(out)
+    }
+}
+
+/// Distance a depth code step represents along a view, m (for tolerances).
+pub fn depth_resolution(view: &View) -> f64 {
+    (view.d_range[1] - view.d_range[0]) / DEPTH_CODES
+}
+
+/// The world position of a point on the nearest surface of a pixel (for tests and images).
+pub fn pixel_point(map: &DepthMap, x: u32, y: u32) -> Option<DVec3> {
+    let i = (y * map.width + x) as usize;
+    let f = f64::from(*map.front.get(i)?);
+    if !f.is_finite() {
+        return None;
+    }
+    let v = &map.view;
+    let a = v.u_range[0] + (f64::from(x) + 0.5) / f64::from(map.width) * (v.u_range[1] - v.u_range[0]);
+    let b = v.w_range[1] - (f64::from(y) + 0.5) / f64::from(map.height) * (v.w_range[1] - v.w_range[0]);
+    Some(v.u * a + v.w * b + v.d * f)
+}
