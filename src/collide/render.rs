@@ -122,7 +122,18 @@ pub struct GpuContext {
 impl GpuContext {
     /// Opens an adapter (backend from `WGPU_BACKEND`, else any) and builds the pipelines.
     pub fn new() -> Result<Self, RenderError> {
-        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        Self::with_instance(wgpu::InstanceDescriptor::new_without_display_handle_from_env())
+    }
+
+    /// Opens an adapter of one of `backends` (ignoring `WGPU_BACKEND`).
+    pub fn with_backends(backends: wgpu::Backends) -> Result<Self, RenderError> {
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+        desc.backends = backends;
+        Self::with_instance(desc)
+    }
+
+    fn with_instance(desc: wgpu::InstanceDescriptor) -> Result<Self, RenderError> {
+        let instance = wgpu::Instance::new(desc);
         let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
             power_preference: wgpu::PowerPreference::HighPerformance,
             ..Default::default()

@@ -1,0 +1,189 @@
+//! GPU golden test of the body depth maps, on both of Mesa's CPU drivers
+//! (wgpu's GL backend through llvmpipe, Vulkan through lavapipe).
+//!
+//! Reference: a CPU rasteriser of the same orthographic views (pixel
+//! centres, nearest and farthest surface). Metric, per view and map:
+//! * coverage: pixels covered in one image but not the other ≤ 0.5 % of the
+//!   covered pixels (silhouette pixels may differ by fill rules);
+//! * depth: on pixels covered in both whose 8 neighbours are covered in
+//!   both and lie within 5 mm of the pixel in the reference (no silhouette
+//!   inside the image, e.g. an arm's edge in front of the torso),
+//!   max |GPU − CPU| ≤ 0.5 mm.
+//!
+//! On failure `target/golden/<name>-actual.png` (GPU depth) and
+//! `<name>-difference.png` (red: coverage differs, white: depth over the
+//! threshold) are written.
+
+use glam::DVec3;
+use grade3d::collide::depth::{DepthMap, View};
+use grade3d::collide::render::{GpuContext, RenderOptions};
+use grade3d::geom::mesh::{FaceId, TriMesh};
+
+mod common;
+use common::fixtures;
+
+const COVERAGE_TOLERANCE: f64 = 0.005;
+const DEPTH_TOLERANCE_M: f64 = 0.5e-3;
+/// Depth steps between neighbouring pixels above this mark a silhouette
+/// inside the image (an arm in front of the torso); such pixels are left
+/// to the coverage metric.
+const SMOOTH_STEP_M: f64 = 5e-3;
+
+/// CPU reference: nearest (`front`) and farthest (`back`) surface along the view's `d` at pixel centres.
+fn rasterise(mesh: &TriMesh, view: &View, n: u32) -> (Vec<f64>, Vec<f64>) {
+    let px = (n * n) as usize;
+    let mut front = vec![f64::NAN; px];
+    let mut back = vec![f64::NAN; px];
+    let to_px = |p: DVec3| {
+        let fx = (p.dot(view.u) - view.u_range[0]) / (view.u_range[1] - view.u_range[0]) * f64::from(n);
+        let fy = (view.w_range[1] - p.dot(view.w)) / (view.w_range[1] - view.w_range[0]) * f64::from(n);
+        (fx, fy, p.dot(view.d))
+    };
+    for f in 0..mesh.face_count() {
+        let [a, b, c] = mesh.corners(FaceId(f as u32)).map(to_px);
+        let area = (b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0);
+        if area.abs() < 1e-12 {
+            continue;
+        }
+        let x0 = a.0.min(b.0).min(c.0).floor().max(0.0) as u32;
+        let x1 = (a.0.max(b.0).max(c.0).ceil() as u32).min(n - 1);
+        let y0 = a.1.min(b.1).min(c.1).floor().max(0.0) as u32;
+        let y1 = (a.1.max(b.1).max(c.1).ceil() as u32).min(n - 1);
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                let (sx, sy) = (f64::from(x) + 0.5, f64::from(y) + 0.5);
+                let w0 = ((b.0 - sx) * (c.1 - sy) - (b.1 - sy) * (c.0 - sx)) / area;
+                let w1 = ((c.0 - sx) * (a.1 - sy) - (c.1 - sy) * (a.0 - sx)) / area;
+                let w2 = 1.0 - w0 - w1;
+                if w0 < 0.0 || w1 < 0.0 || w2 < 0.0 {
+                    continue;
+                }
+                let z = w0 * a.2 + w1 * b.2 + w2 * c.2;
+                let i = (y * n + x) as usize;
+                if front[i].is_nan() || z > front[i] {
+                    front[i] = z;
+                }
+                if back[i].is_nan() || z < back[i] {
+                    back[i] = z;
+                }
+            }
+        }
+    }
+    (front, back)
+}
+
+fn write_png(path: &std::path::Path, n: u32, rgb: &[u8]) {
+    let file = std::fs::File::create(path).unwrap();
+    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), n, n);
+    enc.set_color(png::ColorType::Rgb);
+    enc.set_depth(png::BitDepth::Eight);
+    enc.write_header().unwrap().write_image_data(rgb).unwrap();
+}
+
+struct Comparison {
+    coverage_mismatch: f64,
+    max_depth_diff_m: f64,
+}
+
+fn compare(name: &str, n: u32, gpu: &[f32], cpu: &[f64], view: &View) -> Comparison {
+    let covered = |v: f64| v.is_finite();
+    let mut mismatch = 0usize;
+    let mut covered_px = 0usize;
+    let mut worst = 0.0f64;
+    let mut diff_img = vec![0u8; (3 * n * n) as usize];
+    let mut bad = false;
+    for y in 0..n {
+        for x in 0..n {
+            let i = (y * n + x) as usize;
+            let (g, c) = (f64::from(gpu[i]), cpu[i]);
+            if covered(g) || covered(c) {
+                covered_px += 1;
+            }
+            if covered(g) != covered(c) {
+                mismatch += 1;
+                diff_img[3 * i] = 255;
+                continue;
+            }
+            if !covered(g) {
+                continue;
+            }
+            let interior = (-1i32..=1).all(|dy| {
+                (-1i32..=1).all(|dx| {
+                    let (xx, yy) = (x as i32 + dx, y as i32 + dy);
+                    xx >= 0 && yy >= 0 && xx < n as i32 && yy < n as i32 && {
+                        let j = (yy as u32 * n + xx as u32) as usize;
+                        covered(f64::from(gpu[j])) && covered(cpu[j]) && (cpu[j] - c).abs() < SMOOTH_STEP_M
+                    }
+                })
+            });
+            if interior {
+                let d = (g - c).abs();
+                worst = worst.max(d);
+                if d > DEPTH_TOLERANCE_M {
+                    diff_img[3 * i..3 * i + 3].copy_from_slice(&[255, 255, 255]);
+                    bad = true;
+                }
+            }
+        }
+    }
+    let cmp = Comparison { coverage_mismatch: mismatch as f64 / covered_px.max(1) as f64, max_depth_diff_m: worst };
+    if bad || cmp.coverage_mismatch > COVERAGE_TOLERANCE {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/golden");
+        std::fs::create_dir_all(&dir).unwrap();
+        let (lo, hi) = (view.d_range[0], view.d_range[1]);
+        let actual: Vec<u8> = gpu
+            .iter()
+            .flat_map(|&g| {
+                let v = if g.is_finite() { (255.0 * (f64::from(g) - lo) / (hi - lo)) as u8 } else { 0 };
+                [v, v, v]
+            })
+            .collect();
+        write_png(&dir.join(format!("{name}-actual.png")), n, &actual);
+        write_png(&dir.join(format!("{name}-difference.png")), n, &diff_img);
+    }
+    cmp
+}
+
+/// Both of Mesa's CPU drivers: GL through llvmpipe, Vulkan through lavapipe.
+fn backends() -> [(wgpu::Backends, &'static str); 2] {
+    [(wgpu::Backends::GL, "gl"), (wgpu::Backends::VULKAN, "vulkan")]
+}
+
+#[test]
+fn body_depth_maps_match_the_cpu_reference_on_gl_and_vulkan() {
+    for (backends, label) in backends() {
+        let gpu = match GpuContext::with_backends(backends) {
+            Ok(g) => g,
+            Err(e) => panic!("no {label} adapter: {e} (.ci/run installs Mesa's llvmpipe and lavapipe)"),
+        };
+        check_body_maps(&gpu);
+    }
+}
+
+fn check_body_maps(gpu: &GpuContext) {
+    let info = gpu.adapter().clone();
+    let mesh = grade3d::io::gltf::read_mesh(
+        &std::fs::read(fixtures().join("bodies/female-average-caucasian.glb")).unwrap(),
+        &Default::default(),
+    )
+    .unwrap();
+    let n = 512;
+    let maps: Vec<DepthMap> = gpu.render(&mesh, &RenderOptions { resolution: n, ..Default::default() }).unwrap();
+    assert_eq!(maps.len(), 2);
+    for (k, m) in maps.iter().enumerate() {
+        let (front, back) = rasterise(&mesh, &m.view, n);
+        for (which, g, c) in [("front", &m.front, &front), ("back", &m.back, &back)] {
+            let name = format!("{:?}-view{k}-{which}", info.backend);
+            let cmp = compare(&name, n, g, c, &m.view);
+            eprintln!(
+                "{} ({:?}) view {k} {which}: coverage mismatch {:.4} %, max interior depth difference {:.4} mm",
+                info.name,
+                info.backend,
+                100.0 * cmp.coverage_mismatch,
+                cmp.max_depth_diff_m * 1e3
+            );
+            assert!(cmp.coverage_mismatch <= COVERAGE_TOLERANCE, "{name}: coverage mismatch {}", cmp.coverage_mismatch);
+            assert!(cmp.max_depth_diff_m <= DEPTH_TOLERANCE_M, "{name}: depth difference {} m", cmp.max_depth_diff_m);
+        }
+    }
+}
