@@ -19,8 +19,9 @@ use grade3d::collide::depth::{DepthMap, View};
 use grade3d::collide::render::{GpuContext, RenderOptions};
 use grade3d::geom::mesh::{FaceId, TriMesh};
 
-mod common;
-use common::fixtures;
+fn fixtures() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures")
+}
 
 const COVERAGE_TOLERANCE: f64 = 0.005;
 const DEPTH_TOLERANCE_M: f64 = 0.5e-3;
