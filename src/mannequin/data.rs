@@ -259,40 +259,25 @@ fn fixed(x: f64, unit: f64, what: &str) -> Result<f64, DataError> {
 /// Builds [`Hm08Data`] from a MakeHuman folder (`base.obj`, `hm08.mirror`,
 /// `measures.json`, `targets/`). Generator only; not used at run time.
 pub fn from_makehuman(dir: &Path) -> Result<Hm08Data, DataError> {
-    let obj = read_text(&dir.join("base.obj"))?;
-    let mut positions = Vec::new();
+    let obj = parse_obj(&read_text(&dir.join("base.obj"))?)?;
+    let mut positions = Vec::with_capacity(SKIN_VERTICES);
+    for c in obj.vertices.iter().take(SKIN_VERTICES) {
+        let mut p = [0i32; 3];
+        for k in 0..3 {
+            p[k] = fixed(c[k], POSITION_UNIT_DM, "base.obj")? as i32;
+        }
+        positions.push(p);
+    }
     let mut triangles = Vec::new();
-    let mut group = String::new();
-    for line in obj.lines() {
-        let mut it = line.split_whitespace();
-        match it.next() {
-            Some("v") => {
-                let c: Vec<f64> = it.take(3).filter_map(|s| s.parse().ok()).collect();
-                if c.len() != 3 {
-                    return Err(malformed("base.obj", format!("bad vertex line `{line}`")));
-                }
-                if positions.len() < SKIN_VERTICES {
-                    let mut p = [0i32; 3];
-                    for k in 0..3 {
-                        p[k] = fixed(c[k], POSITION_UNIT_DM, "base.obj")? as i32;
-                    }
-                    positions.push(p);
-                }
-            }
-            Some("g") => group = it.next().unwrap_or("").to_owned(),
-            Some("f") if group == "body" => {
-                let ids: Vec<usize> = it
-                    .filter_map(|s| s.split('/').next()?.parse::<usize>().ok())
-                    .map(|i| i.saturating_sub(1))
-                    .collect();
-                if ids.len() < 3 || ids.iter().any(|&i| i >= SKIN_VERTICES) {
-                    return Err(malformed("base.obj", format!("bad body face `{line}`")));
-                }
-                for k in 1..ids.len() - 1 {
-                    triangles.push([ids[0] as u16, ids[k] as u16, ids[k + 1] as u16]);
-                }
-            }
-            _ => {}
+    for (group, ids) in &obj.faces {
+        if group != "body" {
+            continue;
+        }
+        if ids.iter().any(|&i| i >= SKIN_VERTICES) {
+            return Err(malformed("base.obj", format!("body face {ids:?} leaves the skin")));
+        }
+        for k in 1..ids.len() - 1 {
+            triangles.push([ids[0] as u16, ids[k] as u16, ids[k + 1] as u16]);
         }
     }
     if positions.len() != SKIN_VERTICES {
@@ -367,28 +352,27 @@ pub fn from_makehuman(dir: &Path) -> Result<Hm08Data, DataError> {
     Ok(Hm08Data { positions, triangles, mirror, rings, targets })
 }
 
-/// One face group of `base.obj` (e.g. `helper-skirt`) as a compact
-/// triangle mesh in metres: its vertices renumbered in first-use order,
-/// quads split along their first diagonal. Generator only.
-pub fn obj_group(dir: &Path, group: &str) -> Result<(Vec<glam::DVec3>, Vec<[u32; 3]>), DataError> {
-    let obj = read_text(&dir.join("base.obj"))?;
-    let mut all = Vec::new();
-    let mut current = String::new();
-    let mut remap: BTreeMap<usize, u32> = BTreeMap::new();
-    let mut order = Vec::new();
-    let mut tris = Vec::new();
-    for line in obj.lines() {
+/// The vertices and grouped faces of an OBJ file (0-based vertex ids).
+struct Obj {
+    vertices: Vec<[f64; 3]>,
+    faces: Vec<(String, Vec<usize>)>,
+}
+
+fn parse_obj(text: &str) -> Result<Obj, DataError> {
+    let mut obj = Obj { vertices: Vec::new(), faces: Vec::new() };
+    let mut group = String::new();
+    for line in text.lines() {
         let mut it = line.split_whitespace();
         match it.next() {
             Some("v") => {
                 let c: Vec<f64> = it.take(3).filter_map(|s| s.parse().ok()).collect();
-                if c.len() != 3 {
+                let [x, y, z] = c[..] else {
                     return Err(malformed("base.obj", format!("bad vertex line `{line}`")));
-                }
-                all.push(glam::DVec3::new(c[0], c[1], c[2]) * 0.1);
+                };
+                obj.vertices.push([x, y, z]);
             }
-            Some("g") => current = it.next().unwrap_or("").to_owned(),
-            Some("f") if current == group => {
+            Some("g") => group = it.next().unwrap_or("").to_owned(),
+            Some("f") => {
                 let ids: Vec<usize> = it
                     .filter_map(|s| s.split('/').next()?.parse::<usize>().ok())
                     .map(|i| i.saturating_sub(1))
@@ -396,19 +380,36 @@ pub fn obj_group(dir: &Path, group: &str) -> Result<(Vec<glam::DVec3>, Vec<[u32;
                 if ids.len() < 3 {
                     return Err(malformed("base.obj", format!("bad face `{line}`")));
                 }
-                let mut local = Vec::with_capacity(ids.len());
-                for i in ids {
-                    let next = remap.len() as u32;
-                    local.push(*remap.entry(i).or_insert_with(|| {
-                        order.push(i);
-                        next
-                    }));
-                }
-                for k in 1..local.len() - 1 {
-                    tris.push([local[0], local[k], local[k + 1]]);
-                }
+                obj.faces.push((group.clone(), ids));
             }
             _ => {}
+        }
+    }
+    Ok(obj)
+}
+
+/// One face group of `base.obj` (e.g. `helper-skirt`) as a compact
+/// triangle mesh in metres: its vertices renumbered in first-use order,
+/// quads split along their first diagonal. Generator only.
+pub fn obj_group(dir: &Path, group: &str) -> Result<(Vec<glam::DVec3>, Vec<[u32; 3]>), DataError> {
+    let obj = parse_obj(&read_text(&dir.join("base.obj"))?)?;
+    let mut remap: BTreeMap<usize, u32> = BTreeMap::new();
+    let mut order = Vec::new();
+    let mut tris = Vec::new();
+    for (g, ids) in &obj.faces {
+        if g != group {
+            continue;
+        }
+        let mut local = Vec::with_capacity(ids.len());
+        for &i in ids {
+            let next = remap.len() as u32;
+            local.push(*remap.entry(i).or_insert_with(|| {
+                order.push(i);
+                next
+            }));
+        }
+        for k in 1..local.len() - 1 {
+            tris.push([local[0], local[k], local[k + 1]]);
         }
     }
     if tris.is_empty() {
@@ -416,7 +417,8 @@ pub fn obj_group(dir: &Path, group: &str) -> Result<(Vec<glam::DVec3>, Vec<[u32;
     }
     let mut positions = Vec::with_capacity(order.len());
     for i in order {
-        positions.push(*all.get(i).ok_or_else(|| malformed("base.obj", format!("face refers to vertex {i}")))?);
+        let c = obj.vertices.get(i).ok_or_else(|| malformed("base.obj", format!("face refers to vertex {i}")))?;
+        positions.push(glam::DVec3::from_array(*c) * 0.1);
     }
     Ok((positions, tris))
 }
