@@ -10,5 +10,6 @@ pub mod collide;
 pub mod geom;
 pub mod io;
 pub mod mannequin;
+pub mod refine;
 pub mod service;
 pub mod template;

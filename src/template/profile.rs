@@ -480,6 +480,17 @@ impl Profile {
         total
     }
 
+    /// The same curve traversed from its end to its start: points reversed,
+    /// knots `1 − u_i`, slopes negated — `reversed().eval(u) = eval(1 − u)`
+    /// up to the rounding of `1 − u`.
+    pub fn reversed(&self) -> Profile {
+        Profile {
+            points: self.points.iter().rev().copied().collect(),
+            params: self.params.iter().rev().map(|u| 1.0 - u).collect(),
+            tangents: self.tangents.iter().rev().map(|&t| -t).collect(),
+        }
+    }
+
     /// The halves `c_f(t) = c(t/2)` and `c_b(t) = c(1/2 + t/2)` of seed 000
     /// §5.2, as profiles.
     ///

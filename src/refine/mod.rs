@@ -1,0 +1,4 @@
+//! Refinement of the coarse garment mesh (seed 000 §5): modified
+//! variational subdivision with collision avoidance.
+
+pub mod subdivide;
