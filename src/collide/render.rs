@@ -29,7 +29,8 @@ use crate::geom::mesh::TriMesh;
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(default)]
 pub struct RenderOptions {
-    /// Depth-map resolution, pixels per side. Default 512.
+    /// Depth-map resolution, pixels per side. Default 1024 (at 512 the
+    /// inside test agrees with the exact one on 99.88 % of points, at 1024 on 99.92 %).
     pub resolution: u32,
     /// Which views. Default front/back and left/right.
     pub views: ViewSet,
@@ -39,7 +40,7 @@ pub struct RenderOptions {
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        Self { resolution: 512, views: ViewSet::FrontBackSides, padding_mm: 20.0 }
+        Self { resolution: 1024, views: ViewSet::FrontBackSides, padding_mm: 20.0 }
     }
 }
 

@@ -7,3 +7,4 @@ pub mod polyline;
 pub mod query;
 pub mod simplify;
 pub mod slice;
+pub mod winding;

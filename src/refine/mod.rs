@@ -1,4 +1,5 @@
 //! Refinement of the coarse garment mesh (seed 000 §5): modified
 //! variational subdivision with collision avoidance.
 
+pub mod collision;
 pub mod subdivide;
