@@ -1,6 +1,7 @@
 //! Collision benchmarks (issue #4): depth-map render and read-back at
 //! 512² and 1024² (GL/llvmpipe and Vulkan/lavapipe), and the depth-map
-//! inside test per point. Run: `cargo bench --bench collide`.
+//! inside test per point against the exact (winding-number) test.
+//! Run: `cargo bench --bench collide`.
 #![expect(missing_docs, reason = "criterion_group! generates undocumented items")]
 
 use std::path::Path;
@@ -9,6 +10,7 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use glam::DVec3;
 use grade3d::collide::depth::inside;
 use grade3d::collide::render::{GpuContext, RenderOptions};
+use grade3d::geom::winding::{WindingOptions, WindingTree};
 use grade3d::io::gltf::read_mesh;
 
 fn benches(c: &mut Criterion) {
@@ -45,6 +47,10 @@ fn benches(c: &mut Criterion) {
             .collect();
         c.bench_function("inside_depth_map_10k_points", |b| {
             b.iter(|| pts.iter().filter(|p| inside(&maps, **p).is_some()).count())
+        });
+        let tree = WindingTree::new(&mesh, &WindingOptions::default());
+        c.bench_function("inside_exact_winding_10k_points", |b| {
+            b.iter(|| pts.iter().filter(|p| tree.is_inside(**p)).count())
         });
     }
 }

@@ -812,7 +812,7 @@ fn append_positions(
 fn triangle_count(site: Site, mode: Mode, count: usize) -> Result<usize, GltfError> {
     let err = GltfError::IndexCount { mesh: site.mesh, primitive: site.primitive, count };
     match mode {
-        Mode::Triangles if count >= 3 && count % 3 == 0 => Ok(count / 3),
+        Mode::Triangles if count >= 3 && count.is_multiple_of(3) => Ok(count / 3),
         Mode::TriangleStrip | Mode::TriangleFan if count >= 3 => Ok(count - 2),
         _ => Err(err),
     }
