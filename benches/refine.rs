@@ -5,7 +5,7 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use grade3d::collide::render::{GpuContext, RenderOptions};
-use grade3d::refine::collision::{CollisionOptions, Collider};
+use grade3d::refine::collision::{Collider, CollisionOptions};
 use grade3d::refine::subdivide::{refine, RefineMesh, RefineOptions};
 use grade3d::template::codec::decode;
 use grade3d::template::format::Relocation;
