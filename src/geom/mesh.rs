@@ -233,6 +233,53 @@ impl TriMesh {
         Self::new(self.positions.iter().map(|&p| f(p)).collect(), self.triangles.clone())
     }
 
+    /// The regular icosahedron with vertices `(±1, ±φ, 0)` and cyclic
+    /// permutations (φ the golden ratio): 12 vertices, 20 outward faces.
+    /// A reference shape for tests and benchmarks.
+    pub fn icosahedron() -> Self {
+        let t = (1.0 + 5f64.sqrt()) / 2.0;
+        let positions = [
+            [-1.0, t, 0.0],
+            [1.0, t, 0.0],
+            [-1.0, -t, 0.0],
+            [1.0, -t, 0.0],
+            [0.0, -1.0, t],
+            [0.0, 1.0, t],
+            [0.0, -1.0, -t],
+            [0.0, 1.0, -t],
+            [t, 0.0, -1.0],
+            [t, 0.0, 1.0],
+            [-t, 0.0, -1.0],
+            [-t, 0.0, 1.0],
+        ]
+        .map(DVec3::from_array)
+        .to_vec();
+        const FACES: [[u32; 3]; 20] = [
+            [0, 11, 5],
+            [0, 5, 1],
+            [0, 1, 7],
+            [0, 7, 10],
+            [0, 10, 11],
+            [1, 5, 9],
+            [5, 11, 4],
+            [11, 10, 2],
+            [10, 7, 6],
+            [7, 1, 8],
+            [3, 9, 4],
+            [3, 4, 2],
+            [3, 2, 6],
+            [3, 6, 8],
+            [3, 8, 9],
+            [4, 9, 5],
+            [2, 4, 11],
+            [6, 2, 10],
+            [8, 6, 7],
+            [9, 8, 1],
+        ];
+        let triangles = FACES.iter().map(|t| t.map(VertexId)).collect();
+        Self { positions, triangles }
+    }
+
     /// Merges vertices closer than `tolerance` (grid hashing; exact
     /// duplicates always merge) and drops triangles that collapse.
     /// Scans often arrive with vertices split along UV or normal seams; the

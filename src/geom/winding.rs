@@ -632,46 +632,9 @@ mod tests {
     /// Icosphere of radius `r` about the origin, `level` times subdivided,
     /// counter-clockwise seen from outside.
     fn icosphere_parts(level: u32, r: f64) -> (Vec<DVec3>, Vec<[u32; 3]>) {
-        let t = (1.0 + 5f64.sqrt()) / 2.0;
-        let mut pos: Vec<DVec3> = [
-            (-1.0, t, 0.0),
-            (1.0, t, 0.0),
-            (-1.0, -t, 0.0),
-            (1.0, -t, 0.0),
-            (0.0, -1.0, t),
-            (0.0, 1.0, t),
-            (0.0, -1.0, -t),
-            (0.0, 1.0, -t),
-            (t, 0.0, -1.0),
-            (t, 0.0, 1.0),
-            (-t, 0.0, -1.0),
-            (-t, 0.0, 1.0),
-        ]
-        .iter()
-        .map(|&(x, y, z)| DVec3::new(x, y, z).normalize())
-        .collect();
-        let mut tris: Vec<[u32; 3]> = vec![
-            [0, 11, 5],
-            [0, 5, 1],
-            [0, 1, 7],
-            [0, 7, 10],
-            [0, 10, 11],
-            [1, 5, 9],
-            [5, 11, 4],
-            [11, 10, 2],
-            [10, 7, 6],
-            [7, 1, 8],
-            [3, 9, 4],
-            [3, 4, 2],
-            [3, 2, 6],
-            [3, 6, 8],
-            [3, 8, 9],
-            [4, 9, 5],
-            [2, 4, 11],
-            [6, 2, 10],
-            [8, 6, 7],
-            [9, 8, 1],
-        ];
+        let ico = TriMesh::icosahedron();
+        let mut pos: Vec<DVec3> = ico.positions().iter().map(|p| p.normalize()).collect();
+        let mut tris: Vec<[u32; 3]> = ico.triangles().iter().map(|t| t.map(|v| v.0)).collect();
         for _ in 0..level {
             let mut mid: HashMap<(u32, u32), u32> = HashMap::new();
             let mut next = Vec::with_capacity(tris.len() * 4);

@@ -714,47 +714,14 @@ mod tests {
 
     /// A regular icosahedron (20 faces, outward).
     fn icosahedron() -> RefineMesh {
-        let t = (1.0 + 5.0_f64.sqrt()) / 2.0;
-        let positions = [
-            [-1.0, t, 0.0],
-            [1.0, t, 0.0],
-            [-1.0, -t, 0.0],
-            [1.0, -t, 0.0],
-            [0.0, -1.0, t],
-            [0.0, 1.0, t],
-            [0.0, -1.0, -t],
-            [0.0, 1.0, -t],
-            [t, 0.0, -1.0],
-            [t, 0.0, 1.0],
-            [-t, 0.0, -1.0],
-            [-t, 0.0, 1.0],
-        ]
-        .map(DVec3::from_array)
-        .to_vec();
-        let triangles = vec![
-            [0, 11, 5],
-            [0, 5, 1],
-            [0, 1, 7],
-            [0, 7, 10],
-            [0, 10, 11],
-            [1, 5, 9],
-            [5, 11, 4],
-            [11, 10, 2],
-            [10, 7, 6],
-            [7, 1, 8],
-            [3, 9, 4],
-            [3, 4, 2],
-            [3, 2, 6],
-            [3, 6, 8],
-            [3, 8, 9],
-            [4, 9, 5],
-            [2, 4, 11],
-            [6, 2, 10],
-            [8, 6, 7],
-            [9, 8, 1],
-        ];
-        let n = positions.len();
-        RefineMesh { positions, triangles, fixed: vec![true; n], edge_profiles: BTreeMap::new() }
+        let m = crate::geom::mesh::TriMesh::icosahedron();
+        let n = m.vertex_count();
+        RefineMesh {
+            positions: m.positions().to_vec(),
+            triangles: m.triangles().iter().map(|t| t.map(|v| v.0)).collect(),
+            fixed: vec![true; n],
+            edge_profiles: BTreeMap::new(),
+        }
     }
 
     /// A `k × k` grid of unit spacing in the plane z = 0; boundary vertices fixed.
