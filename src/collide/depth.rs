@@ -135,6 +135,12 @@ impl DepthMap {
 
     /// Eq. (13) for one view.
     pub fn probe(&self, p: DVec3) -> Probe {
+        self.probe_with_margin(p, 0.0)
+    }
+
+    /// Eq. (13) for the body thickened by `margin` (m) along the view axis:
+    /// `back − margin ≤ p·d ≤ front + margin`.
+    pub fn probe_with_margin(&self, p: DVec3, margin: f64) -> Probe {
         let outside = Probe { inside: false, escape: 0.0, normal: DVec3::ZERO };
         let Some(i) = self.pixel(p) else { return outside };
         let (f, b) = (f64::from(self.front[i]), f64::from(self.back[i]));
@@ -142,11 +148,11 @@ impl DepthMap {
             return outside;
         }
         let z = p.dot(self.view.d);
-        if z < b || z > f {
+        if z < b - margin || z > f + margin {
             return outside;
         }
-        let to_front = f - z;
-        let to_back = z - b;
+        let to_front = f + margin - z;
+        let to_back = z - (b - margin);
         let (escape, n) =
             if to_front <= to_back { (to_front, self.front_normal[i]) } else { (to_back, self.back_normal[i]) };
         let n = DVec3::new(f64::from(n[0]), f64::from(n[1]), f64::from(n[2]));
@@ -157,9 +163,14 @@ impl DepthMap {
 /// Eq. (13) over several views: inside iff inside in every view. Returns
 /// the probe with the smallest escape (the way out).
 pub fn inside(maps: &[DepthMap], p: DVec3) -> Option<Probe> {
+    inside_with_margin(maps, p, 0.0)
+}
+
+/// [`inside`] for the body thickened by `margin` (m) along every view axis.
+pub fn inside_with_margin(maps: &[DepthMap], p: DVec3, margin: f64) -> Option<Probe> {
     let mut best: Option<Probe> = None;
     for m in maps {
-        let pr = m.probe(p);
+        let pr = m.probe_with_margin(p, margin);
         if !pr.inside {
             return None;
         }

@@ -1,8 +1,9 @@
 //! Collision avoidance during refinement (seed 000 §5.4).
 //!
 //! After every fairing sweep ([`super::subdivide::refine`]'s hook), each
-//! free vertex is tested against the body's depth maps by Eq. (13)
-//! ([`crate::collide::depth::inside`]):
+//! free vertex is tested against the body's depth maps by Eq. (13), with
+//! the body thickened by [`CollisionOptions::detection_margin_mm`]
+//! ([`crate::collide::depth::inside_with_margin`]):
 //! * a vertex the sweep moved from outside to inside has its update
 //!   **refused** — sub-stepped as the paper suggests: of the fractions
 //!   `k/n` (`n` = [`CollisionOptions::substeps`]) of its update, the largest
@@ -18,7 +19,7 @@
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
-use crate::collide::depth::{inside, DepthMap};
+use crate::collide::depth::{inside_with_margin, DepthMap};
 
 /// Knobs of collision avoidance.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -28,11 +29,16 @@ pub struct CollisionOptions {
     pub clearance_mm: f64,
     /// Sub-steps tried when a fairing update would enter the body. Default 4.
     pub substeps: u32,
+    /// The body is thickened by this much along each view axis when
+    /// testing, so that vertices a pixel's width from the skin — where the
+    /// depth maps cannot resolve in from out — count as inside, mm.
+    /// Default 1.5.
+    pub detection_margin_mm: f64,
 }
 
 impl Default for CollisionOptions {
     fn default() -> Self {
-        Self { clearance_mm: 3.0, substeps: 4 }
+        Self { clearance_mm: 3.0, substeps: 4, detection_margin_mm: 1.5 }
     }
 }
 
@@ -63,19 +69,22 @@ impl<'a> Collider<'a> {
     /// The hook: refuse updates that enter the body, push out what is inside.
     pub fn after_sweep(&mut self, positions: &mut [DVec3], fixed: &[bool]) {
         let clearance = self.opts.clearance_mm * 1e-3;
+        let margin = self.opts.detection_margin_mm * 1e-3;
+        let maps = self.maps;
+        let hit = |q: DVec3| inside_with_margin(maps, q, margin);
         let same_level = self.previous.len() == positions.len();
         for (i, p) in positions.iter_mut().enumerate() {
             if fixed.get(i).copied().unwrap_or(true) {
                 continue;
             }
-            let Some(probe) = inside(self.maps, *p) else { continue };
-            if same_level && inside(self.maps, self.previous[i]).is_none() {
+            let Some(probe) = hit(*p) else { continue };
+            if same_level && hit(self.previous[i]).is_none() {
                 let from = self.previous[i];
                 let n = self.opts.substeps.max(1);
                 let mut kept = from;
                 for k in (1..n).rev() {
                     let q = from.lerp(*p, f64::from(k) / f64::from(n));
-                    if inside(self.maps, q).is_none() {
+                    if hit(q).is_none() {
                         kept = q;
                         break;
                     }
@@ -83,7 +92,7 @@ impl<'a> Collider<'a> {
                 *p = kept;
                 self.report.refused += 1;
             } else {
-                *p += probe.normal * (probe.escape + clearance);
+                *p += probe.normal * (probe.escape - margin + clearance);
                 self.report.pushed += 1;
             }
         }
