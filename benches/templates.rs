@@ -6,14 +6,12 @@
 use std::path::Path;
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use glam::DVec3;
-use grade3d::geom::mesh::VertexId;
 use grade3d::geom::simplify::SimplifyOptions;
 use grade3d::io::gltf::read_mesh;
 use grade3d::template::codec::decode;
 use grade3d::template::format::Relocation;
 use grade3d::template::library::{builtin, reference_body, straight_skirt, trousers, SkirtOptions, TrouserOptions};
-use grade3d::template::topology::topology_by_simplification;
+use grade3d::template::topology::{encoded_rings, topology_by_simplification};
 
 fn benches(c: &mut Criterion) {
     let body = reference_body().expect("reference body");
@@ -35,28 +33,7 @@ fn benches(c: &mut Criterion) {
         .expect("mesh")
         .welded(1e-9)
         .expect("weld");
-    let bb = skirt.aabb();
-    let centre = bb.centre();
-    let mut encoded: Vec<VertexId> = Vec::new();
-    for level in [bb.max.y, 0.5 * (bb.min.y + bb.max.y), bb.min.y] {
-        for k in 0..8 {
-            let ang = std::f64::consts::TAU * k as f64 / 8.0;
-            let dir = DVec3::new(ang.sin(), 0.0, ang.cos());
-            let v = (0..skirt.vertex_count())
-                .min_by(|&a, &b| {
-                    let score = |v: usize| {
-                        let p = skirt.positions()[v];
-                        (p - centre).with_y(0.0).normalize().distance(dir) + (p.y - level).abs()
-                    };
-                    score(a).total_cmp(&score(b))
-                })
-                .expect("vertices");
-            let v = VertexId(v as u32);
-            if !encoded.contains(&v) {
-                encoded.push(v);
-            }
-        }
-    }
+    let encoded = encoded_rings(&skirt, 3, 8);
     let mut g = c.benchmark_group("topology");
     g.sample_size(20);
     g.bench_function("simplify_helper_skirt_to_template", |b| {

@@ -5,13 +5,12 @@
 use glam::{DQuat, DVec3};
 use grade3d::body::derive::{derive_features, DeriveOptions};
 use grade3d::body::feature::FeatureBody;
-use grade3d::geom::mesh::VertexId;
 use grade3d::geom::simplify::{check_oriented_manifold, SimplifyOptions};
 use grade3d::io::gltf::read_mesh;
 use grade3d::template::codec::{decode, CoarseMesh};
 use grade3d::template::format::{Relocation, Template};
 use grade3d::template::library::{author_all, builtin, reference_body};
-use grade3d::template::topology::topology_by_simplification;
+use grade3d::template::topology::{encoded_rings, topology_by_simplification};
 use proptest::prelude::*;
 use std::sync::OnceLock;
 
@@ -153,36 +152,9 @@ fn helper_skirt_simplifies_to_its_encoded_nodes() {
         .unwrap();
     let stats = check_oriented_manifold(&mesh).unwrap();
     assert_eq!(stats.boundary_loops, 2, "helper-skirt is a tube");
-    // encoded nodes: 8 around the top boundary, 8 around the hem, 8 around the middle
-    let bb = mesh.aabb();
-    let centre = bb.centre();
-    let mut encoded: Vec<VertexId> = Vec::new();
-    for level in [bb.max.y, 0.5 * (bb.min.y + bb.max.y), bb.min.y] {
-        for k in 0..8 {
-            let ang = std::f64::consts::TAU * k as f64 / 8.0;
-            let target = DVec3::new(centre.x + ang.sin(), level, centre.z + ang.cos());
-            let v = (0..mesh.vertex_count())
-                .filter(|&v| (mesh.positions()[v].y - level).abs() < 0.15 * bb.size().y)
-                .min_by(|&a, &b| {
-                    let da = (mesh.positions()[a] - centre)
-                        .with_y(0.0)
-                        .normalize()
-                        .distance((target - centre).with_y(0.0).normalize())
-                        + (mesh.positions()[a].y - level).abs();
-                    let db = (mesh.positions()[b] - centre)
-                        .with_y(0.0)
-                        .normalize()
-                        .distance((target - centre).with_y(0.0).normalize())
-                        + (mesh.positions()[b].y - level).abs();
-                    da.total_cmp(&db)
-                })
-                .unwrap();
-            let v = VertexId(v as u32);
-            if !encoded.contains(&v) {
-                encoded.push(v);
-            }
-        }
-    }
+    // encoded nodes: 8 around the top boundary, 8 around the middle, 8 around the hem
+    let encoded = encoded_rings(&mesh, 3, 8);
+    assert_eq!(encoded.len(), 24);
     let topo = topology_by_simplification(&mesh, &encoded, &SimplifyOptions::default()).unwrap();
     for (k, &v) in encoded.iter().enumerate() {
         assert_eq!(topo.mesh.position(topo.nodes[k]), mesh.position(v), "encoded node {k} moved");

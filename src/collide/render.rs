@@ -68,6 +68,14 @@ pub enum RenderError {
     Readback(String),
 }
 
+/// What every view of one body shares: normals and the index buffer.
+struct Body<'a> {
+    mesh: &'a TriMesh,
+    normals: &'a [DVec3],
+    indices: &'a wgpu::Buffer,
+    index_count: u32,
+}
+
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 struct Vertex {
@@ -211,27 +219,29 @@ impl GpuContext {
         }
         let bb = mesh.aabb();
         let views = View::set(opts.views, bb.min, bb.max, opts.padding_mm * 1e-3);
-        views.iter().map(|v| self.render_view(mesh, v, n)).collect()
-    }
-
-    fn render_view(&self, mesh: &TriMesh, view: &View, n: u32) -> Result<DepthMap, RenderError> {
         let normals = mesh.vertex_normals();
-        let vertices: Vec<Vertex> = mesh
-            .positions()
-            .iter()
-            .zip(&normals)
-            .map(|(p, nn)| Vertex { clip: view.clip(*p), normal: nn.as_vec3().to_array() })
-            .collect();
         let indices: Vec<u32> = mesh.triangles().iter().flat_map(|t| t.map(|v| v.0)).collect();
-        let vbuf = self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("grade3d body vertices"),
-            contents: bytemuck::cast_slice(&vertices),
-            usage: wgpu::BufferUsages::VERTEX,
-        });
         let ibuf = self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("grade3d body indices"),
             contents: bytemuck::cast_slice(&indices),
             usage: wgpu::BufferUsages::INDEX,
+        });
+        let body = Body { mesh, normals: &normals, indices: &ibuf, index_count: indices.len() as u32 };
+        views.iter().map(|v| self.render_view(&body, v, n)).collect()
+    }
+
+    fn render_view(&self, body: &Body<'_>, view: &View, n: u32) -> Result<DepthMap, RenderError> {
+        let (mesh, normals) = (body.mesh, body.normals);
+        let vertices: Vec<Vertex> = mesh
+            .positions()
+            .iter()
+            .zip(normals)
+            .map(|(p, nn)| Vertex { clip: view.clip(*p), normal: nn.as_vec3().to_array() })
+            .collect();
+        let vbuf = self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("grade3d body vertices"),
+            contents: bytemuck::cast_slice(&vertices),
+            usage: wgpu::BufferUsages::VERTEX,
         });
         let extent = wgpu::Extent3d { width: n, height: n, depth_or_array_layers: 1 };
         let texture = |label: &str, format: wgpu::TextureFormat, usage: wgpu::TextureUsages| {
@@ -286,8 +296,8 @@ impl GpuContext {
                 });
                 rp.set_pipeline(pipeline);
                 rp.set_vertex_buffer(0, vbuf.slice(..));
-                rp.set_index_buffer(ibuf.slice(..), wgpu::IndexFormat::Uint32);
-                rp.draw_indexed(0..indices.len() as u32, 0, 0..1);
+                rp.set_index_buffer(body.indices.slice(..), wgpu::IndexFormat::Uint32);
+                rp.draw_indexed(0..body.index_count, 0, 0..1);
             }
             let mut bufs = Vec::new();
             for (t, what) in [(&packed, "depth"), (&normal, "normal")] {
