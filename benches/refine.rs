@@ -1,10 +1,12 @@
 //! Refinement benchmarks (issue #4): the straight skirt on the reference
 //! body refined to 1, 2 and 3 levels (split + Butterfly + fairing), and 3
-//! levels with depth-map collision avoidance. Run: `cargo bench --bench refine`.
+//! levels with depth-map collision avoidance and the exact final pass, and
+//! building the body's winding-number hierarchy (cached per body). Run: `cargo bench --bench refine`.
 #![expect(missing_docs, reason = "criterion_group! generates undocumented items")]
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use grade3d::collide::render::{GpuContext, RenderOptions};
+use grade3d::geom::winding::{WindingOptions, WindingTree};
 use grade3d::refine::collision::{Collider, CollisionOptions};
 use grade3d::refine::subdivide::{refine, RefineMesh, RefineOptions};
 use grade3d::template::codec::decode;
@@ -27,12 +29,18 @@ fn benches(c: &mut Criterion) {
     }
     if let Ok(gpu) = GpuContext::new() {
         let maps = gpu.render(&body.mesh, &RenderOptions::default()).expect("render");
+        let tree = WindingTree::new(&body.mesh, &WindingOptions::default());
         let opts = RefineOptions::default();
         g.bench_function("levels_3_with_collision", |b| {
             b.iter(|| {
                 let mut collider = Collider::new(&maps, CollisionOptions::default());
-                refine(coarse.clone(), &opts, |p, f| collider.after_sweep(p, f)).expect("refine")
+                let (mut fine, _) = refine(coarse.clone(), &opts, |p, h| collider.after_sweep(p, h)).expect("refine");
+                collider.settle(&tree, &mut fine.positions, &fine.fixed);
+                fine
             })
+        });
+        g.bench_function("winding_tree_of_the_body", |b| {
+            b.iter(|| WindingTree::new(&body.mesh, &WindingOptions::default()))
         });
     }
     g.finish();

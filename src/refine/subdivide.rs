@@ -69,8 +69,14 @@
 //! [`LevelReport`] says which. Conjugate gradients check that on the recomputed residual.
 //!
 //! After every sweep (iteration) the hook of [`refine`] may move vertices (the collision
-//! step, issue #4); its moves of fixed vertices are undone, and conjugate gradients
-//! restart from the new positions when it moved a free vertex.
+//! step, issue #4) and **hold** free vertices for the rest of the level: held vertices
+//! join the fixed ones, so the level solves the fairing system of the remaining free
+//! vertices with the held ones as constraints (an active set that only grows; it is
+//! reset at the next level, whose split starts from collision-free positions). Its moves
+//! of fixed vertices are undone; conjugate gradients restart from the true residual of
+//! the current free set whenever the hook moved or held a free vertex. Because the set
+//! only grows, it settles after finitely many restarts and the reduced system converges
+//! like the unconstrained one ([`LevelReport::held`], [`LevelReport::converged`]).
 //!
 //! **Preconditions.** An oriented manifold triangle mesh, possibly with boundary: every
 //! edge in one or two faces, traversed in opposite directions by its two faces; no
@@ -249,8 +255,12 @@ pub struct LevelReport {
     /// Largest update `|U²(v)|/ν` of the last sweep (iteration) over the bounding-box
     /// diagonal (0 with no free vertex).
     pub final_update_rel: f64,
-    /// Whether `final_update_rel` reached [`RefineOptions::tolerance`].
+    /// Whether `final_update_rel` reached [`RefineOptions::tolerance`] (on the free
+    /// vertices left once the hook has held some).
     pub converged: bool,
+    /// Vertices the hook held for the rest of the level (the collision step's refused
+    /// and pushed vertices); 0 without a hook.
+    pub held: usize,
 }
 
 impl RefineMesh {
@@ -379,18 +389,20 @@ fn boundary_point(before: Option<DVec3>, x: DVec3, y: DVec3, after: Option<DVec3
 /// # Errors
 /// Any violated precondition (module docs), as a [`RefineError`].
 pub fn fair(mesh: &mut RefineMesh, opts: &RefineOptions) -> Result<LevelReport, RefineError> {
-    fair_level(mesh, opts, 0, &mut |_: &mut [DVec3], _: &[bool]| {})
+    fair_level(mesh, opts, 0, &mut |_: &mut [DVec3], _: &mut [bool]| {})
 }
 
 /// `opts.levels` × (split with the boundary rule, fairing) of `coarse` (module docs).
 ///
-/// `after_sweep(positions, fixed)` runs after every fairing sweep (the collision step
-/// pushes free vertices out of the body there); its moves of fixed vertices are undone.
+/// `after_sweep(positions, held)` runs after every fairing sweep (the collision step
+/// pushes free vertices out of the body there); `held` marks the fixed vertices and those
+/// held so far in this level, and the hook may hold more by setting their flag (module
+/// docs: an active set). Its moves of fixed vertices are undone.
 ///
 /// # Errors
 /// Any violated precondition (module docs), as a [`RefineError`]; a non-finite position
 /// left by the hook as [`RefineError::NonFinitePosition`].
-pub fn refine<F: FnMut(&mut [DVec3], &[bool])>(
+pub fn refine<F: FnMut(&mut [DVec3], &mut [bool])>(
     coarse: RefineMesh,
     opts: &RefineOptions,
     mut after_sweep: F,
@@ -406,19 +418,22 @@ pub fn refine<F: FnMut(&mut [DVec3], &[bool])>(
 }
 
 /// Solves `U²(v) = 0` for the free vertices with `opts.solver` (module docs).
-fn fair_level<F: FnMut(&mut [DVec3], &[bool])>(
+fn fair_level<F: FnMut(&mut [DVec3], &mut [bool])>(
     mesh: &mut RefineMesh,
     opts: &RefineOptions,
     level: usize,
     after_sweep: &mut F,
 ) -> Result<LevelReport, RefineError> {
     let ring = Topology::of(mesh)?.neighbours;
-    let free: Vec<usize> = (0..mesh.positions.len()).filter(|&i| !mesh.fixed[i] && !ring[i].is_empty()).collect();
     // ν of Eq. 12: 1 + (1/n_i) Σ_k 1/n_{i,k}, the coefficient of v_i in U²(v_i)
-    let nu: Vec<f64> = free
+    let nu: Vec<f64> = ring
         .iter()
-        .map(|&i| {
-            1.0 + ring[i].iter().map(|&k| 1.0 / ring[k as usize].len() as f64).sum::<f64>() / ring[i].len() as f64
+        .map(|r| {
+            if r.is_empty() {
+                0.0
+            } else {
+                1.0 + r.iter().map(|&k| 1.0 / ring[k as usize].len() as f64).sum::<f64>() / r.len() as f64
+            }
         })
         .collect();
     let diagonal = bounding_diagonal(&mesh.positions);
@@ -427,11 +442,9 @@ fn fair_level<F: FnMut(&mut [DVec3], &[bool])>(
         faces: mesh.triangles.len(),
         fairing_sweeps: 0,
         final_update_rel: 0.0,
-        converged: free.is_empty(),
+        converged: false,
+        held: 0,
     };
-    if free.is_empty() {
-        return Ok(report);
-    }
     let pinned: Vec<(usize, DVec3)> = mesh
         .fixed
         .iter()
@@ -442,18 +455,25 @@ fn fair_level<F: FnMut(&mut [DVec3], &[bool])>(
         .collect();
     let mut system = System {
         ring: &ring,
-        free: &free,
-        nu: &nu,
+        nu_all: &nu,
+        free: Vec::new(),
+        nu: Vec::new(),
+        held: mesh.fixed.clone(),
         scale: if diagonal > 0.0 { diagonal } else { 1.0 },
-        fixed: &mesh.fixed,
         pinned: &pinned,
         hook: after_sweep,
     };
+    system.collect_free();
+    if system.free.is_empty() {
+        report.converged = true;
+        return Ok(report);
+    }
     let pos = &mut mesh.positions;
     match opts.solver {
         FairingSolver::GaussSeidel => system.gauss_seidel(pos, opts, &mut report),
         FairingSolver::ConjugateGradient => system.conjugate_gradient(pos, opts, &mut report),
     }
+    report.held = system.held.iter().zip(&mesh.fixed).filter(|(h, f)| **h && !**f).count();
     if let Some(v) = pos.iter().position(|p| !p.is_finite()) {
         return Err(RefineError::NonFinitePosition { vertex: v as u32 });
     }
@@ -464,21 +484,29 @@ fn fair_level<F: FnMut(&mut [DVec3], &[bool])>(
 struct System<'a, F> {
     /// Sorted 1-ring of every vertex.
     ring: &'a [Vec<u32>],
-    /// Free vertices with a non-empty ring, ascending.
-    free: &'a [usize],
-    /// `ν_i` of Eq. 12 per free vertex.
-    nu: &'a [f64],
+    /// `ν_i` of Eq. 12 per vertex (0 for an empty ring).
+    nu_all: &'a [f64],
+    /// Free vertices with a non-empty ring, ascending: neither fixed nor held.
+    free: Vec<usize>,
+    /// `ν_i` per free vertex.
+    nu: Vec<f64>,
+    /// Fixed or held by the hook, per vertex; what the hook sees and may set.
+    held: Vec<bool>,
     /// Length the updates are measured against (bounding-box diagonal, or 1).
     scale: f64,
-    /// Fixed flags, for the hook.
-    fixed: &'a [bool],
     /// Fixed vertices and their positions, restored after the hook.
     pinned: &'a [(usize, DVec3)],
     /// Called after every sweep / iteration.
     hook: &'a mut F,
 }
 
-impl<F: FnMut(&mut [DVec3], &[bool])> System<'_, F> {
+impl<F: FnMut(&mut [DVec3], &mut [bool])> System<'_, F> {
+    /// The free vertices (neither fixed nor held, with a ring) and their `ν`.
+    fn collect_free(&mut self) {
+        self.free = (0..self.held.len()).filter(|&i| !self.held[i] && !self.ring[i].is_empty()).collect();
+        self.nu = self.free.iter().map(|&i| self.nu_all[i]).collect();
+    }
+
     /// `U(v_k)` (Eq. 10).
     fn umbrella(&self, pos: &[DVec3], k: usize) -> DVec3 {
         let ring = &self.ring[k];
@@ -488,21 +516,28 @@ impl<F: FnMut(&mut [DVec3], &[bool])> System<'_, F> {
         ring.iter().map(|&j| pos[j as usize]).sum::<DVec3>() / ring.len() as f64 - pos[k]
     }
 
-    /// Runs the hook, restores the fixed vertices; whether a free vertex moved.
+    /// Runs the hook, restores the fixed vertices and drops newly held vertices from
+    /// the free set; whether the system changed (a free vertex moved or was held).
     fn after_sweep(&mut self, pos: &mut [DVec3]) -> bool {
         let before: Vec<DVec3> = self.free.iter().map(|&i| pos[i]).collect();
-        (self.hook)(pos, self.fixed);
+        (self.hook)(pos, &mut self.held);
         for &(i, p) in self.pinned {
             pos[i] = p;
+            self.held[i] = true;
         }
-        self.free.iter().zip(&before).any(|(&i, &b)| pos[i] != b)
+        let moved = self.free.iter().zip(&before).any(|(&i, &b)| pos[i] != b);
+        if self.free.iter().any(|&i| self.held[i]) {
+            self.collect_free();
+            return true;
+        }
+        moved
     }
 
     /// Eq. 12 for every free vertex in ascending id, in place, per sweep.
     fn gauss_seidel(&mut self, pos: &mut [DVec3], opts: &RefineOptions, report: &mut LevelReport) {
         while report.fairing_sweeps < opts.max_sweeps {
             let mut largest = 0.0_f64;
-            for (&i, &nu_i) in self.free.iter().zip(self.nu) {
+            for (&i, &nu_i) in self.free.iter().zip(&self.nu) {
                 let ring = &self.ring[i];
                 let mean = ring.iter().map(|&k| self.umbrella(pos, k as usize)).sum::<DVec3>() / ring.len() as f64;
                 let step = (mean - self.umbrella(pos, i)) / nu_i;
@@ -512,7 +547,7 @@ impl<F: FnMut(&mut [DVec3], &[bool])> System<'_, F> {
             self.after_sweep(pos);
             report.fairing_sweeps += 1;
             report.final_update_rel = largest / self.scale;
-            if report.final_update_rel <= opts.tolerance {
+            if report.final_update_rel <= opts.tolerance || self.free.is_empty() {
                 report.converged = true;
                 return;
             }
@@ -525,31 +560,35 @@ impl<F: FnMut(&mut [DVec3], &[bool])> System<'_, F> {
         for (k, uk) in u.iter_mut().enumerate() {
             *uk = self.umbrella(q, k);
         }
-        for (o, &i) in out.iter_mut().zip(self.free) {
+        for (o, &i) in out.iter_mut().zip(&self.free) {
             *o = self.ring[i].iter().map(|&k| u[k as usize]).sum::<DVec3>() - self.ring[i].len() as f64 * u[i];
         }
     }
 
     /// Preconditioned residual `z_i = −U²(v_i) / ν_i` (the Eq. 12 update) from `r_i = −n_i U²(v_i)`.
     fn precondition(&self, r: &[DVec3], z: &mut [DVec3]) {
-        for ((zj, &rj), (&i, &nu_i)) in z.iter_mut().zip(r).zip(self.free.iter().zip(self.nu)) {
+        for ((zj, &rj), (&i, &nu_i)) in z.iter_mut().zip(r).zip(self.free.iter().zip(&self.nu)) {
             *zj = rj / (self.ring[i].len() as f64 * nu_i);
         }
     }
 
     /// Diagonally preconditioned conjugate gradients, the three coordinates as three
-    /// independent systems; restarted from the true residual when the hook moves a free
-    /// vertex and before accepting convergence.
+    /// independent systems; restarted from the true residual (of the current free set)
+    /// when the hook moves or holds a free vertex, and before accepting convergence.
     fn conjugate_gradient(&mut self, pos: &mut [DVec3], opts: &RefineOptions, report: &mut LevelReport) {
-        let (n, m) = (pos.len(), self.free.len());
+        let n = pos.len();
         let mut u = vec![DVec3::ZERO; n];
         let mut q = vec![DVec3::ZERO; n];
-        let (mut r, mut z, mut p, mut ap) =
-            (vec![DVec3::ZERO; m], vec![DVec3::ZERO; m], vec![DVec3::ZERO; m], vec![DVec3::ZERO; m]);
+        let (mut r, mut z, mut p, mut ap) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         let mut restart = true;
         let mut rz = DVec3::ZERO;
         loop {
             if restart {
+                let m = self.free.len();
+                for v in [&mut r, &mut z, &mut p, &mut ap] {
+                    v.clear();
+                    v.resize(m, DVec3::ZERO);
+                }
                 self.apply(pos, &mut u, &mut r);
                 r.iter_mut().for_each(|x| *x = -*x);
                 self.precondition(&r, &mut z);
@@ -569,6 +608,7 @@ impl<F: FnMut(&mut [DVec3], &[bool])> System<'_, F> {
             if report.fairing_sweeps >= opts.max_sweeps {
                 return;
             }
+            q.iter_mut().for_each(|x| *x = DVec3::ZERO);
             for (&i, &pj) in self.free.iter().zip(&p) {
                 q[i] = pj;
             }
@@ -803,7 +843,7 @@ mod tests {
         })
     }
 
-    fn no_hook(_: &mut [DVec3], _: &[bool]) {}
+    fn no_hook(_: &mut [DVec3], _: &mut [bool]) {}
 
     /// Total area of the triangles.
     fn area(mesh: &RefineMesh) -> f64 {
@@ -1047,9 +1087,9 @@ mod tests {
         let (mesh, _, _) = skirt();
         let opts = RefineOptions::default();
         let mut calls = 0;
-        let (fine, reports) = refine(mesh.clone(), &opts, |pos: &mut [DVec3], fixed: &[bool]| {
+        let (fine, reports) = refine(mesh.clone(), &opts, |pos: &mut [DVec3], fixed: &mut [bool]| {
             calls += 1;
-            for (p, &f) in pos.iter_mut().zip(fixed) {
+            for (p, &f) in pos.iter_mut().zip(fixed.iter()) {
                 if f {
                     *p += DVec3::ONE;
                 }
@@ -1059,6 +1099,38 @@ mod tests {
         assert_eq!(calls, reports.iter().map(|r| r.fairing_sweeps).sum::<usize>());
         let (plain, _) = refine(mesh.clone(), &opts, no_hook).expect("refine");
         assert_eq!(fine, plain);
+    }
+
+    #[test]
+    fn held_vertices_stay_put_and_the_rest_converges() {
+        // the hook holds every free vertex below the skirt's mid-height on its first
+        // sight of it (an obstacle's active set): held vertices never move again, the
+        // level still converges on the rest, and the report counts them
+        let (mesh, _, _) = skirt();
+        let opts = RefineOptions::default();
+        let mid = mesh.positions.iter().map(|p| p.y).sum::<f64>() / mesh.positions.len() as f64;
+        let mut first_held: Vec<Option<DVec3>> = Vec::new();
+        let mut moved_after_hold = 0usize;
+        let (_, reports) = refine(mesh.clone(), &opts, |pos: &mut [DVec3], held: &mut [bool]| {
+            if first_held.len() != pos.len() {
+                first_held = vec![None; pos.len()];
+            }
+            for (i, p) in pos.iter().enumerate() {
+                match first_held[i] {
+                    Some(q) if q != *p => moved_after_hold += 1,
+                    Some(_) => {}
+                    None if !held[i] && p.y < mid => {
+                        held[i] = true;
+                        first_held[i] = Some(*p);
+                    }
+                    None => {}
+                }
+            }
+        })
+        .expect("refine");
+        assert_eq!(moved_after_hold, 0, "a held vertex moved");
+        assert!(reports.iter().all(|r| r.converged), "{reports:?}");
+        assert!(reports.iter().all(|r| r.held > 0), "{reports:?}");
     }
 
     #[test]

@@ -1,0 +1,194 @@
+//! Per-body cache of what collision needs: the depth maps (rendered once per
+//! body, seed 000 §5.4) and the exact inside test's hierarchy.
+//!
+//! Keys are content addresses: BLAKE3 of the body's positions and
+//! triangles (little-endian `f64` / `u32`) and of the [`RenderOptions`], so
+//! the same scan posted twice, or the same size-chart mannequin graded with
+//! another template, reuses its maps. Least-recently-used eviction at
+//! [`ObstacleCacheOptions::capacity`] entries. A lookup that misses runs the
+//! given builder outside the lock (two concurrent misses of one body may
+//! both build; the first insert wins). Hits and misses are counted for the
+//! service's metrics. No failure modes of its own: the builder's error is
+//! passed through and nothing is cached.
+
+use std::collections::VecDeque;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
+
+use super::depth::DepthMap;
+use super::render::RenderOptions;
+use crate::geom::mesh::TriMesh;
+use crate::geom::winding::WindingTree;
+
+/// Content address of one body under one set of render options.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct BodyKey(pub [u8; 32]);
+
+impl BodyKey {
+    /// BLAKE3 of the mesh (positions, triangles) and the render options.
+    pub fn of(mesh: &TriMesh, opts: &RenderOptions) -> Self {
+        let mut h = blake3::Hasher::new();
+        h.update(b"grade3d body v1");
+        h.update(&(mesh.positions().len() as u64).to_le_bytes());
+        for p in mesh.positions() {
+            for c in p.to_array() {
+                h.update(&c.to_le_bytes());
+            }
+        }
+        h.update(&(mesh.triangles().len() as u64).to_le_bytes());
+        for t in mesh.triangles() {
+            for v in t {
+                h.update(&v.0.to_le_bytes());
+            }
+        }
+        h.update(&opts.resolution.to_le_bytes());
+        h.update(format!("{:?}", opts.views).as_bytes());
+        h.update(&opts.padding_mm.to_le_bytes());
+        Self(*h.finalize().as_bytes())
+    }
+}
+
+/// The body as an obstacle: its depth maps and its exact inside test.
+#[derive(Debug)]
+pub struct Obstacle {
+    /// Depth maps of every view (Eq. 13).
+    pub maps: Vec<DepthMap>,
+    /// Winding-number hierarchy (exact final pass, measurements).
+    pub tree: WindingTree,
+}
+
+/// Knobs of the cache.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct ObstacleCacheOptions {
+    /// Bodies kept (count); about 30 MB each at 1024² with four views. Default 16.
+    pub capacity: usize,
+}
+
+impl Default for ObstacleCacheOptions {
+    fn default() -> Self {
+        Self { capacity: 16 }
+    }
+}
+
+/// LRU cache of [`Obstacle`]s keyed by [`BodyKey`]; shareable across threads.
+#[derive(Debug)]
+pub struct ObstacleCache {
+    opts: ObstacleCacheOptions,
+    /// Most recently used last.
+    entries: Mutex<VecDeque<(BodyKey, Arc<Obstacle>)>>,
+    hits: AtomicU64,
+    misses: AtomicU64,
+}
+
+impl ObstacleCache {
+    /// An empty cache.
+    pub fn new(opts: ObstacleCacheOptions) -> Self {
+        Self { opts, entries: Mutex::new(VecDeque::new()), hits: AtomicU64::new(0), misses: AtomicU64::new(0) }
+    }
+
+    /// The cached obstacle of `key`, or `build()`'s, inserted.
+    ///
+    /// # Errors
+    /// `build`'s error; nothing is cached then.
+    pub fn get_or_build<E>(
+        &self,
+        key: BodyKey,
+        build: impl FnOnce() -> Result<Obstacle, E>,
+    ) -> Result<Arc<Obstacle>, E> {
+        if let Some(hit) = self.lookup(key) {
+            self.hits.fetch_add(1, Ordering::Relaxed);
+            return Ok(hit);
+        }
+        self.misses.fetch_add(1, Ordering::Relaxed);
+        let built = Arc::new(build()?);
+        let mut entries = self.entries.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(pos) = entries.iter().position(|(k, _)| *k == key) {
+            return Ok(Arc::clone(&entries[pos].1));
+        }
+        if self.opts.capacity == 0 {
+            return Ok(built);
+        }
+        while entries.len() >= self.opts.capacity {
+            entries.pop_front();
+        }
+        entries.push_back((key, Arc::clone(&built)));
+        Ok(built)
+    }
+
+    fn lookup(&self, key: BodyKey) -> Option<Arc<Obstacle>> {
+        let mut entries = self.entries.lock().unwrap_or_else(|e| e.into_inner());
+        let pos = entries.iter().position(|(k, _)| *k == key)?;
+        let entry = entries.remove(pos)?;
+        let found = Arc::clone(&entry.1);
+        entries.push_back(entry);
+        Some(found)
+    }
+
+    /// Lookups served from the cache.
+    pub fn hits(&self) -> u64 {
+        self.hits.load(Ordering::Relaxed)
+    }
+
+    /// Lookups that built.
+    pub fn misses(&self) -> u64 {
+        self.misses.load(Ordering::Relaxed)
+    }
+
+    /// Bodies held now.
+    pub fn len(&self) -> usize {
+        self.entries.lock().unwrap_or_else(|e| e.into_inner()).len()
+    }
+
+    /// Whether no body is held.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::mesh::TriMesh;
+    use crate::geom::winding::WindingOptions;
+
+    fn obstacle(mesh: &TriMesh) -> Obstacle {
+        Obstacle { maps: Vec::new(), tree: WindingTree::new(mesh, &WindingOptions::default()) }
+    }
+
+    #[test]
+    fn same_body_hits_other_body_or_options_miss_and_lru_evicts() {
+        let a = TriMesh::icosahedron();
+        let b = TriMesh::new(a.positions().iter().map(|p| *p * 2.0).collect(), a.triangles().to_vec())
+            .expect("scaled icosahedron");
+        let opts = RenderOptions::default();
+        let low = RenderOptions { resolution: 512, ..opts };
+        assert_eq!(BodyKey::of(&a, &opts), BodyKey::of(&a.clone(), &opts));
+        assert_ne!(BodyKey::of(&a, &opts), BodyKey::of(&b, &opts));
+        assert_ne!(BodyKey::of(&a, &opts), BodyKey::of(&a, &low));
+
+        let cache = ObstacleCache::new(ObstacleCacheOptions { capacity: 2 });
+        let mut builds = 0;
+        let mut get = |m: &TriMesh, o: &RenderOptions| {
+            cache
+                .get_or_build(BodyKey::of(m, o), || {
+                    builds += 1;
+                    Ok::<_, ()>(obstacle(m))
+                })
+                .expect("build")
+        };
+        let first = get(&a, &opts);
+        get(&b, &opts);
+        let again = get(&a, &opts); // hit: a is now the most recently used
+        assert!(Arc::ptr_eq(&first, &again));
+        get(&a, &low); // evicts the least recently used: b
+        get(&a, &opts);
+        get(&b, &opts); // built again
+        assert_eq!(builds, 4);
+        assert_eq!((cache.hits(), cache.misses()), (2, 4));
+        assert_eq!(cache.len(), 2);
+        let failed = cache.get_or_build(BodyKey([7; 32]), || Err::<Obstacle, _>("no adapter"));
+        assert_eq!(failed.unwrap_err(), "no adapter");
+        assert_eq!(cache.len(), 2, "failures are not cached");
+    }
+}
