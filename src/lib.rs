@@ -10,6 +10,8 @@ pub mod collide;
 pub mod geom;
 pub mod io;
 pub mod mannequin;
+pub mod pattern;
+pub mod pipeline;
 pub mod refine;
 pub mod service;
 pub mod template;

@@ -37,6 +37,22 @@ enum Command {
         /// Its landmarks JSON.
         landmarks: PathBuf,
     },
+    /// Flatten one panel (OBJ) with LSCM + ARAP and print the result as JSON
+    /// (what `benches/peer_flatten.py` compares with libigl).
+    Flatten {
+        /// The panel, a triangulated disc (OBJ).
+        panel: PathBuf,
+        /// Print JSON (the only output format; kept for the peer script's command line).
+        #[arg(long)]
+        json: bool,
+    },
+    /// Grade every built-in template on the reference body and write each panel as OBJ
+    /// (the inputs of `benches/peer_flatten.py`).
+    Panels {
+        /// Output folder.
+        #[arg(long, default_value = "target/panels")]
+        dir: PathBuf,
+    },
     /// Regenerate shipped data from ../shared sources.
     Data {
         #[command(subcommand)]
@@ -150,6 +166,8 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
             }
         }
         Command::FitChart { chart, figure } => fit_chart(&chart, &figure)?,
+        Command::Flatten { panel, json: _ } => flatten_panel(&panel)?,
+        Command::Panels { dir } => write_panels(&dir)?,
         Command::Measure { body, landmarks } => measure_body(&body, &landmarks)?,
     }
     Ok(())
@@ -246,6 +264,60 @@ fn measure_body(body: &std::path::Path, landmarks: &std::path::Path) -> Result<(
             p.position.z,
             p.frame.triple().abs()
         )?;
+    }
+    Ok(())
+}
+
+fn flatten_panel(path: &std::path::Path) -> Result<(), Box<dyn std::error::Error>> {
+    use grade3d::pattern::flatten::{distortion, flatten, lscm, FlattenOptions};
+    let (positions, triangles) = grade3d::io::obj::read_obj(&std::fs::read_to_string(path)?)?;
+    let start = std::time::Instant::now();
+    lscm(&positions, &triangles)?;
+    let lscm_ms = start.elapsed().as_secs_f64() * 1e3;
+    let start = std::time::Instant::now();
+    let flat = flatten(&positions, &triangles, &FlattenOptions::default())?;
+    let total_ms = start.elapsed().as_secs_f64() * 1e3;
+    let d = distortion(&positions, &triangles, &flat.uv);
+    let out = serde_json::json!({
+        "vertices": positions.len(),
+        "triangles": triangles.len(),
+        "lscm_ms": lscm_ms,
+        "arap_ms": (total_ms - lscm_ms).max(0.0),
+        "total_ms": total_ms,
+        "iterations": flat.iterations,
+        "converged": flat.converged,
+        "distortion": d,
+        "uv": flat.uv.iter().map(|p| [p.x, p.y]).collect::<Vec<_>>(),
+    });
+    println!("{out}");
+    Ok(())
+}
+
+fn write_panels(dir: &std::path::Path) -> Result<(), Box<dyn std::error::Error>> {
+    use grade3d::collide::cache::Obstacle;
+    use grade3d::collide::render::{GpuContext, RenderOptions};
+    use grade3d::geom::winding::{WindingOptions, WindingTree};
+    std::fs::create_dir_all(dir)?;
+    let body = grade3d::template::library::reference_body()?;
+    let obstacle = match GpuContext::new() {
+        Ok(gpu) => Some(Obstacle {
+            maps: gpu.render(&body.mesh, &RenderOptions::default())?,
+            tree: WindingTree::new(&body.mesh, &WindingOptions::default()),
+        }),
+        Err(e) => {
+            eprintln!("no GPU adapter ({e}): refining without collision avoidance");
+            None
+        }
+    };
+    for t in grade3d::template::library::builtin().map_err(|(name, e)| format!("template {name}: {e}"))? {
+        let g = grade3d::pipeline::grade(&t, &body, obstacle.as_ref(), "reference", &Default::default())?;
+        let levels = t.defaults.levels as usize;
+        let (panels, _, _) = grade3d::pattern::panels::cut(&t, &g.mesh.positions, &g.mesh.triangles, levels)?;
+        for p in panels {
+            let path = dir.join(format!("{}-{}.obj", t.name, p.name));
+            std::fs::write(&path, grade3d::io::obj::write_obj(&p.positions, None, &p.triangles))?;
+            println!("wrote {} ({} vertices, {} triangles)", path.display(), p.positions.len(), p.triangles.len());
+        }
     }
     Ok(())
 }

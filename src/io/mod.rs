@@ -2,3 +2,4 @@
 //! Every reader validates and returns typed errors; none panics on input.
 pub mod gltf;
 pub mod landmarks;
+pub mod obj;

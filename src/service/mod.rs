@@ -9,6 +9,9 @@ use axum::Router;
 
 use crate::template::format::Template;
 
+pub mod problem;
+pub mod store;
+
 /// Shared state of the service.
 #[derive(Debug, Clone, Default)]
 pub struct AppState {

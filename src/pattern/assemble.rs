@@ -1,0 +1,384 @@
+//! Pattern pieces from flattened panels (seed 000 §6; seed 002 §6 for seam,
+//! grain and notch lines): orientation by the grain line, sew line, cut line
+//! with mitred corners, notches, internal feature lines, grade points, and
+//! the per-piece and per-seam figures of issue #5.
+//!
+//! # Contract
+//!
+//! **Placement.** The flattened panel (`uv`, metres) is scaled to mm,
+//! mirrored if its outline runs clockwise (so every piece is seen from the
+//! garment's outside, where the template's faces are counter-clockwise),
+//! rotated so that the template's grain line `from → to` points along `−y`
+//! (grain lines run down the body, so the piece is upright) and translated
+//! so that the grain line's `from` node — the **stack point** — is the origin.
+//!
+//! **Sew line** — the panel's outline. **Corners** (turn points) — template
+//! nodes on the outline where a seam starts or ends, or where the outline
+//! turns by more than [`PieceOptions::corner_angle_deg`].
+//!
+//! **Cut line** — the sew line offset outwards by the seam allowance `s`:
+//! each edge moved by `s` along its outward normal `n = (d_y, −d_x)/|d|`
+//! (counter-clockwise polygon), consecutive offset edges intersected (a
+//! mitre); where the mitre would reach further than
+//! [`PieceOptions::miter_limit`] × `s` from the corner the corner is
+//! bevelled (two points instead).
+//!
+//! **Notches** — at every template notch node on the outline, across the
+//! allowance along the vertex normal (bisector of the two edge normals).
+//! Both sides of a seam get the notch at the same template node, so they
+//! sit at matching distances along the seam up to the seam's mismatch
+//! ([`SeamReport`]).
+//!
+//! **Internal lines** — interior template edges whose end nodes lie on the
+//! same girth (their feature points share the first name token, e.g.
+//! `hip_front` and `hip_front_left`), as fine chains: the hip, bust and
+//! knee lines.
+//!
+//! **Failure modes** — [`PieceError`]: the grain line's nodes not in the
+//! panel, or `uv` not one point per panel vertex.
+
+use std::collections::{BTreeMap, HashSet};
+
+use glam::{DVec2, DVec3};
+use serde::{Deserialize, Serialize};
+
+use super::panels::{Lineage, Panel, SeamChain};
+use super::piece::{GradePoint, GradePointKind, InternalLine, PatternPiece, PieceNotch};
+use crate::template::format::Template;
+
+/// Metres to millimetres.
+const MM_PER_M: f64 = 1e3;
+
+/// Knobs of piece assembly.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct PieceOptions {
+    /// Seam allowance, mm. Default 10 (the template's `defaults.seam_allowance_mm` is
+    /// what the grading pipeline passes).
+    pub seam_allowance_mm: f64,
+    /// A template node on the outline is a corner when the outline turns there by
+    /// more than this, degrees. Default 30.
+    pub corner_angle_deg: f64,
+    /// A mitre longer than this multiple of the allowance is bevelled (count). Default 3.
+    pub miter_limit: f64,
+}
+
+impl Default for PieceOptions {
+    fn default() -> Self {
+        Self { seam_allowance_mm: 10.0, corner_angle_deg: 30.0, miter_limit: 3.0 }
+    }
+}
+
+/// Why a piece could not be assembled.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum PieceError {
+    /// A grain-line node is not in the panel.
+    #[error("panel '{panel}': grain-line node {node} is not in the panel")]
+    GrainOffPanel {
+        /// Panel name.
+        panel: String,
+        /// Template node.
+        node: u32,
+    },
+    /// The grain line has zero length in the flattened panel.
+    #[error("panel '{panel}': the grain line has zero length when flattened")]
+    DegenerateGrain {
+        /// Panel name.
+        panel: String,
+    },
+    /// `uv` does not have one point per panel vertex.
+    #[error("panel '{panel}': {uv} flattened points for {vertices} vertices")]
+    UvCount {
+        /// Panel name.
+        panel: String,
+        /// Points given.
+        uv: usize,
+        /// Panel vertices.
+        vertices: usize,
+    },
+}
+
+/// A piece in mm, aligned, with its panel's local vertex positions in 2D.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlacedPanel {
+    /// The pattern piece.
+    pub piece: PatternPiece,
+    /// Every panel vertex in piece coordinates, mm (local ids of the [`Panel`]).
+    pub uv_mm: Vec<DVec2>,
+}
+
+/// Figures of one seam: the two sides' 2D lengths against the 3D length.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SeamReport {
+    /// Seam name.
+    pub name: String,
+    /// Piece of side a.
+    pub piece_a: String,
+    /// Piece of side b.
+    pub piece_b: String,
+    /// Length on the 3D garment, mm.
+    pub length_3d_mm: f64,
+    /// Sew-line length of side a, mm.
+    pub length_a_mm: f64,
+    /// Sew-line length of side b, mm.
+    pub length_b_mm: f64,
+    /// `|length_a − length_b|`, mm.
+    pub mismatch_mm: f64,
+    /// Largest difference of a notch's distance from the seam start between the sides, mm
+    /// (0 when the seam has no notch).
+    pub notch_mismatch_mm: f64,
+}
+
+/// Builds the pattern piece of `panel` from its flattening `uv` (metres, one per
+/// local vertex) — module docs.
+///
+/// # Errors
+/// [`PieceError`].
+pub fn assemble(
+    t: &Template,
+    panel: &Panel,
+    seams: &[SeamChain],
+    lineage: &Lineage,
+    uv: &[DVec2],
+    size: &str,
+    opts: &PieceOptions,
+) -> Result<PlacedPanel, PieceError> {
+    let name = || panel.name.clone();
+    if uv.len() != panel.positions.len() {
+        return Err(PieceError::UvCount { panel: name(), uv: uv.len(), vertices: panel.positions.len() });
+    }
+    let template_panel = &t.panels[panel.index];
+    let node_local = |node: u32| panel.local(node).ok_or(PieceError::GrainOffPanel { panel: name(), node });
+    let (from, to) = (node_local(template_panel.grain.from)?, node_local(template_panel.grain.to)?);
+    let mut pts: Vec<DVec2> = uv.iter().map(|p| *p * MM_PER_M).collect();
+    let outline_pts: Vec<DVec2> = panel.outline.iter().map(|&l| pts[l as usize]).collect();
+    if signed_area(&outline_pts) < 0.0 {
+        pts.iter_mut().for_each(|p| p.x = -p.x);
+    }
+    let grain = pts[to as usize] - pts[from as usize];
+    if grain.length() <= f64::EPSILON {
+        return Err(PieceError::DegenerateGrain { panel: name() });
+    }
+    // rotate grain onto −y: angle of grain to angle −π/2
+    let rot = DVec2::from_angle(-std::f64::consts::FRAC_PI_2 - grain.y.atan2(grain.x));
+    let origin = pts[from as usize];
+    let pts: Vec<DVec2> = pts.iter().map(|&p| rot.rotate(p - origin)).collect();
+
+    let n_nodes = t.nodes.len() as u32;
+    let sew_line: Vec<DVec2> = panel.outline.iter().map(|&l| pts[l as usize]).collect();
+    let global_of = |k: usize| panel.global[panel.outline[k] as usize];
+    // seam ends (template nodes) touching this panel
+    let seam_ends: HashSet<u32> = seams
+        .iter()
+        .filter(|s| s.panel_a == panel.index || s.panel_b == panel.index)
+        .flat_map(|s| [s.chain.first().copied(), s.chain.last().copied()])
+        .flatten()
+        .collect();
+    let n = sew_line.len();
+    let cos_limit = opts.corner_angle_deg.to_radians().cos();
+    let corners: Vec<usize> = (0..n)
+        .filter(|&k| {
+            let g = global_of(k);
+            if g >= n_nodes {
+                return false;
+            }
+            if seam_ends.contains(&g) {
+                return true;
+            }
+            let (a, b) = (sew_line[k] - sew_line[(k + n - 1) % n], sew_line[(k + 1) % n] - sew_line[k]);
+            a.normalize_or_zero().dot(b.normalize_or_zero()) < cos_limit
+        })
+        .collect();
+    let allowance = opts.seam_allowance_mm;
+    let cut_line = offset_polygon(&sew_line, allowance, opts.miter_limit);
+
+    // labels: the node's feature point, with the node id where a panel repeats it
+    let mut count: BTreeMap<&str, usize> = BTreeMap::new();
+    for k in 0..n {
+        if let Some(node) = t.nodes.get(global_of(k) as usize) {
+            *count.entry(node.point.as_str()).or_default() += 1;
+        }
+    }
+    let label = |node: u32| {
+        let p = t.nodes[node as usize].point.as_str();
+        if count.get(p).copied().unwrap_or(0) > 1 {
+            format!("{p}#{node}")
+        } else {
+            p.to_string()
+        }
+    };
+    let mut notches = Vec::new();
+    let mut grade_points: Vec<GradePoint> = corners
+        .iter()
+        .map(|&k| GradePoint {
+            node: global_of(k),
+            label: label(global_of(k)),
+            at: sew_line[k],
+            kind: GradePointKind::Corner,
+        })
+        .collect();
+    for notch in &t.notches {
+        let Some(k) = (0..n).find(|&k| global_of(k) == notch.node) else { continue };
+        let outward = vertex_normal(&sew_line, k);
+        let at = sew_line[k];
+        notches.push(PieceNotch { name: notch.name.clone(), at, outward, on_cut_line: at + outward * allowance });
+        grade_points.push(GradePoint { node: notch.node, label: label(notch.node), at, kind: GradePointKind::Notch });
+    }
+    let internal_lines = internal_lines(t, panel, lineage, &pts);
+    let grain_len = grain.length();
+    let piece = PatternPiece {
+        name: panel.name.clone(),
+        size: size.to_string(),
+        quantity: template_panel.quantity,
+        sew_line,
+        corners,
+        cut_line,
+        seam_allowance_mm: allowance,
+        notches,
+        grain: [DVec2::ZERO, DVec2::new(0.0, -grain_len)],
+        internal_lines,
+        grade_points,
+        stack_point: DVec2::ZERO,
+    };
+    Ok(PlacedPanel { piece, uv_mm: pts })
+}
+
+/// Interior girth lines of the panel (module docs), merged into polylines.
+fn internal_lines(t: &Template, panel: &Panel, lineage: &Lineage, pts: &[DVec2]) -> Vec<InternalLine> {
+    let on_outline: HashSet<u32> = panel.outline.iter().copied().collect();
+    let token = |node: u32| t.nodes[node as usize].point.as_str().split('_').next().unwrap_or("").to_string();
+    // per girth: chains of local ids, joined end to end
+    let mut lines: Vec<(String, Vec<u32>)> = Vec::new();
+    for e in &t.edges {
+        let (Some(a), Some(b)) = (panel.local(e.start), panel.local(e.end)) else { continue };
+        if token(e.start) != token(e.end) || (on_outline.contains(&a) && on_outline.contains(&b)) {
+            continue;
+        }
+        let Some(chain) = lineage.chain(e.start, e.end) else { continue };
+        let Some(mut chain) = chain.iter().map(|&g| panel.local(g)).collect::<Option<Vec<u32>>>() else { continue };
+        let name = format!("{}_line", token(e.start));
+        let mut merged = false;
+        for (_, line) in lines.iter_mut().filter(|(n, _)| *n == name) {
+            let (first, last) = (line[0], line[line.len() - 1]);
+            if last == chain[0] {
+                line.extend_from_slice(&chain[1..]);
+            } else if last == chain[chain.len() - 1] {
+                chain.reverse();
+                line.extend_from_slice(&chain[1..]);
+            } else if first == chain[chain.len() - 1] {
+                chain.extend_from_slice(&line[1..]);
+                *line = chain.clone();
+            } else if first == chain[0] {
+                chain.reverse();
+                chain.extend_from_slice(&line[1..]);
+                *line = chain.clone();
+            } else {
+                continue;
+            }
+            merged = true;
+            break;
+        }
+        if !merged {
+            lines.push((name, chain));
+        }
+    }
+    lines
+        .into_iter()
+        .map(|(name, ids)| InternalLine { name, points: ids.iter().map(|&l| pts[l as usize]).collect() })
+        .collect()
+}
+
+/// Signed area of a closed polygon (positive counter-clockwise).
+pub fn signed_area(poly: &[DVec2]) -> f64 {
+    let n = poly.len();
+    (0..n).map(|i| poly[i].perp_dot(poly[(i + 1) % n])).sum::<f64>() / 2.0
+}
+
+/// Unit outward normal of the counter-clockwise polygon's vertex `k`: the
+/// normalised sum of its two edges' outward normals.
+fn vertex_normal(poly: &[DVec2], k: usize) -> DVec2 {
+    let n = poly.len();
+    let edge_normal = |a: DVec2, b: DVec2| {
+        let d = (b - a).normalize_or_zero();
+        DVec2::new(d.y, -d.x)
+    };
+    let m = edge_normal(poly[(k + n - 1) % n], poly[k]) + edge_normal(poly[k], poly[(k + 1) % n]);
+    m.normalize_or_zero()
+}
+
+/// The counter-clockwise polygon offset outwards by `d` with mitred corners,
+/// bevelled where the mitre would reach beyond `miter_limit × d` (module docs).
+pub fn offset_polygon(poly: &[DVec2], d: f64, miter_limit: f64) -> Vec<DVec2> {
+    let n = poly.len();
+    if n < 3 || d == 0.0 {
+        return poly.to_vec();
+    }
+    let normal = |i: usize| {
+        let e = (poly[(i + 1) % n] - poly[i]).normalize_or_zero();
+        DVec2::new(e.y, -e.x)
+    };
+    let mut out = Vec::with_capacity(n + 8);
+    for (k, &p) in poly.iter().enumerate() {
+        let (n0, n1) = (normal((k + n - 1) % n), normal(k));
+        let bis = n0 + n1;
+        let denom = 1.0 + n0.dot(n1);
+        // mitre point: p + d (n0 + n1) / (1 + n0·n1); its distance is d·√(2/(1+cos θ))
+        if denom > f64::EPSILON && (2.0 / denom).sqrt() <= miter_limit {
+            out.push(p + bis * (d / denom));
+        } else {
+            out.push(p + n0 * d);
+            out.push(p + n1 * d);
+        }
+    }
+    out
+}
+
+/// Length of an open polyline.
+pub fn polyline_length(p: &[DVec2]) -> f64 {
+    p.windows(2).map(|w| w[0].distance(w[1])).sum()
+}
+
+/// Length of an open 3D polyline.
+pub fn polyline_length_3d(p: &[DVec3]) -> f64 {
+    p.windows(2).map(|w| w[0].distance(w[1])).sum()
+}
+
+/// Largest distance of a polyline's points from the chord through its ends, mm
+/// (seed 004's straightness of a key dimensional curve).
+pub fn deviation_from_chord(p: &[DVec2]) -> f64 {
+    let (Some(&a), Some(&b)) = (p.first(), p.last()) else { return 0.0 };
+    let d = (b - a).normalize_or_zero();
+    p.iter().map(|&q| (q - a).perp_dot(d).abs()).fold(0.0, f64::max)
+}
+
+/// Whether a closed polygon has two non-adjacent edges that intersect (or
+/// touch). `O(n²)`.
+pub fn self_intersects(poly: &[DVec2]) -> bool {
+    let n = poly.len();
+    for i in 0..n {
+        let (a, b) = (poly[i], poly[(i + 1) % n]);
+        for j in i + 2..n {
+            if i == 0 && j == n - 1 {
+                continue;
+            }
+            let (c, d) = (poly[j], poly[(j + 1) % n]);
+            if segments_intersect(a, b, c, d) {
+                return true;
+            }
+        }
+    }
+    false
+}
+
+/// Closed-segment intersection test by orientations.
+fn segments_intersect(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> bool {
+    let o = |p: DVec2, q: DVec2, r: DVec2| (q - p).perp_dot(r - p);
+    let (d1, d2, d3, d4) = (o(c, d, a), o(c, d, b), o(a, b, c), o(a, b, d));
+    if ((d1 > 0.0 && d2 < 0.0) || (d1 < 0.0 && d2 > 0.0)) && ((d3 > 0.0 && d4 < 0.0) || (d3 < 0.0 && d4 > 0.0)) {
+        return true;
+    }
+    let on = |p: DVec2, q: DVec2, r: DVec2| {
+        o(p, q, r) == 0.0 && r.x >= p.x.min(q.x) && r.x <= p.x.max(q.x) && r.y >= p.y.min(q.y) && r.y <= p.y.max(q.y)
+    };
+    on(c, d, a) || on(c, d, b) || on(a, b, c) || on(a, b, d)
+}

@@ -1,0 +1,369 @@
+//! Cutting the refined garment `M_L` into its panels along the template's
+//! seams (seed 000 §6: "the 3D garment is cut into pieces along the seam
+//! lines, and each piece is flattened").
+//!
+//! # Contract
+//!
+//! **Lineage.** The 1-to-4 split of [`crate::refine::subdivide`] numbers
+//! everything deterministically: face `f` of level `j` becomes faces
+//! `4f … 4f+3` of level `j+1`, and the new vertex of the `k`-th edge of
+//! [`edge_keys`] gets id `n_j + k`; old vertices keep their ids. Hence
+//! * the fine face `f` of `M_L` lies in the coarse face `f / 4^L`, so a
+//!   panel is the set of fine faces whose coarse face is one of the panel's
+//!   template faces;
+//! * coarse node `i` is fine vertex `i`;
+//! * the fine chain along the coarse edge `(a, b)` is
+//!   `chain(a, b) = chain(a, m) ⧺ chain(m, b)` with `m` the split vertex of
+//!   `(a, b)`, replayed level by level from the coarse triangles alone
+//!   ([`Lineage`]).
+//!
+//! **Panels.** Each [`Panel`] is the sub-mesh of its fine faces with its own
+//! vertex numbering (`global[local]`), so vertices on a seam are duplicated
+//! into both panels — the cut. Its outline is its one boundary loop, run in
+//! the faces' orientation (counter-clockwise seen from outside). Seams are
+//! the fine chains of the template seam's coarse edges, in order.
+//!
+//! **Preconditions.** The fine mesh is what [`crate::refine::subdivide::refine`]
+//! made of the template's coarse mesh in `levels` levels (face count
+//! `4^levels ×` the template's). **Failure modes**: [`PanelError`] naming the
+//! panel, seam or edge — face count mismatch, a panel that is not a disc
+//! (not exactly one boundary loop), a seam edge not on both panels'
+//! outlines, a seam whose edges do not chain.
+
+use std::collections::{BTreeMap, HashMap};
+
+use glam::DVec3;
+
+use crate::refine::subdivide::edge_keys;
+use crate::template::format::Template;
+
+/// Why a panel could not be cut out.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum PanelError {
+    /// The fine mesh does not have `4^levels ×` the template's faces.
+    #[error("fine mesh has {fine} faces; {levels} levels of a {coarse}-face template give {expected}")]
+    FaceCount {
+        /// Fine faces.
+        fine: usize,
+        /// Template faces.
+        coarse: usize,
+        /// Levels.
+        levels: usize,
+        /// `4^levels × coarse`.
+        expected: usize,
+    },
+    /// A panel's faces do not form a disc.
+    #[error("panel '{panel}' has {loops} boundary loops; a pattern piece must be a disc (one loop)")]
+    NotADisc {
+        /// Panel name.
+        panel: String,
+        /// Boundary loops found.
+        loops: usize,
+    },
+    /// A seam's coarse edge is not on a panel's outline.
+    #[error("seam '{seam}': template edge {edge} is not on the outline of panel '{panel}'")]
+    SeamOffOutline {
+        /// Seam name.
+        seam: String,
+        /// Template edge.
+        edge: u32,
+        /// Panel name.
+        panel: String,
+    },
+    /// Consecutive seam edges share no node.
+    #[error("seam '{seam}': template edges {first} and {second} do not meet")]
+    SeamNotChained {
+        /// Seam name.
+        seam: String,
+        /// An edge.
+        first: u32,
+        /// The next edge.
+        second: u32,
+    },
+    /// A seam names a panel that does not exist.
+    #[error("seam '{seam}' names unknown panel '{panel}'")]
+    UnknownPanel {
+        /// Seam name.
+        seam: String,
+        /// Panel name.
+        panel: String,
+    },
+}
+
+/// The split vertices of every level, replayed from the coarse triangles.
+#[derive(Debug, Clone)]
+pub struct Lineage {
+    /// Per level `j = 0 … L−1`: the split vertex of each undirected edge `(min, max)` of `M_j`.
+    midpoints: Vec<HashMap<(u32, u32), u32>>,
+}
+
+impl Lineage {
+    /// Replays `levels` splits of `coarse` (`n_coarse` vertices).
+    pub fn new(coarse: &[[u32; 3]], n_coarse: usize, levels: usize) -> Self {
+        let mut triangles = coarse.to_vec();
+        let mut n = n_coarse as u32;
+        let mut midpoints = Vec::with_capacity(levels);
+        for _ in 0..levels {
+            let keys = edge_keys(&triangles);
+            let mids: HashMap<(u32, u32), u32> = keys.iter().enumerate().map(|(k, &e)| (e, n + k as u32)).collect();
+            let mid = |a: u32, b: u32| mids[&(a.min(b), a.max(b))];
+            triangles = triangles
+                .iter()
+                .flat_map(|&[a, b, c]| {
+                    let (ab, bc, ca) = (mid(a, b), mid(b, c), mid(c, a));
+                    [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]
+                })
+                .collect();
+            n += keys.len() as u32;
+            midpoints.push(mids);
+        }
+        Self { midpoints }
+    }
+
+    /// Levels replayed.
+    pub fn levels(&self) -> usize {
+        self.midpoints.len()
+    }
+
+    /// The fine vertices along the coarse edge `a → b`, `a` first and `b` last
+    /// (`2^L + 1` of them); `None` if `(a, b)` is not an edge of the coarse mesh.
+    pub fn chain(&self, a: u32, b: u32) -> Option<Vec<u32>> {
+        let mut chain = vec![a, b];
+        for mids in &self.midpoints {
+            let mut next = Vec::with_capacity(2 * chain.len() - 1);
+            for w in chain.windows(2) {
+                next.push(w[0]);
+                next.push(*mids.get(&(w[0].min(w[1]), w[0].max(w[1])))?);
+            }
+            next.push(*chain.last()?);
+            chain = next;
+        }
+        Some(chain)
+    }
+}
+
+/// One panel cut out of the fine mesh.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Panel {
+    /// Template panel name.
+    pub name: String,
+    /// Index of the panel in the template.
+    pub index: usize,
+    /// Fine vertex id of each local vertex.
+    pub global: Vec<u32>,
+    /// Local positions (copied from the fine mesh).
+    pub positions: Vec<DVec3>,
+    /// Triangles in local ids, orientation kept.
+    pub triangles: Vec<[u32; 3]>,
+    /// The boundary loop in local ids, in the faces' orientation, starting at
+    /// its smallest template node.
+    pub outline: Vec<u32>,
+}
+
+impl Panel {
+    /// Local id of a fine vertex, if the panel has it.
+    pub fn local(&self, global: u32) -> Option<u32> {
+        self.global.binary_search(&global).ok().map(|i| i as u32)
+    }
+}
+
+/// A seam: the fine chain along its coarse edges, and the two panels.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SeamChain {
+    /// Seam name.
+    pub name: String,
+    /// Panel index of side a.
+    pub panel_a: usize,
+    /// Panel index of side b.
+    pub panel_b: usize,
+    /// Fine vertex ids along the seam.
+    pub chain: Vec<u32>,
+}
+
+/// Cuts the fine mesh (`positions`, `triangles`) of `levels` levels of the
+/// template `t` into its panels and seams (module docs).
+///
+/// # Errors
+/// [`PanelError`] (module docs).
+pub fn cut(
+    t: &Template,
+    positions: &[DVec3],
+    triangles: &[[u32; 3]],
+    levels: usize,
+) -> Result<(Vec<Panel>, Vec<SeamChain>, Lineage), PanelError> {
+    let coarse: Vec<[u32; 3]> = (0..t.faces.len()).map(|f| t.face_nodes(f)).collect();
+    let per = 1usize << (2 * levels);
+    let expected = coarse.len() * per;
+    if triangles.len() != expected {
+        return Err(PanelError::FaceCount { fine: triangles.len(), coarse: coarse.len(), levels, expected });
+    }
+    let lineage = Lineage::new(&coarse, t.nodes.len(), levels);
+    let mut panels = Vec::with_capacity(t.panels.len());
+    for (index, p) in t.panels.iter().enumerate() {
+        let fine: Vec<[u32; 3]> =
+            p.faces.iter().flat_map(|&f| triangles[f as usize * per..(f as usize + 1) * per].iter().copied()).collect();
+        let mut global: Vec<u32> = fine.iter().flatten().copied().collect();
+        global.sort_unstable();
+        global.dedup();
+        let local = |g: u32| global.binary_search(&g).map(|i| i as u32).unwrap_or(u32::MAX);
+        let local_tris: Vec<[u32; 3]> = fine.iter().map(|t| t.map(local)).collect();
+        let loops = boundary_loops(&local_tris);
+        if loops.len() != 1 {
+            return Err(PanelError::NotADisc { panel: p.name.clone(), loops: loops.len() });
+        }
+        let mut outline = loops.into_iter().next().unwrap_or_default();
+        // start at the smallest template node on the loop (deterministic)
+        if let Some(start) = (0..outline.len()).min_by_key(|&k| global[outline[k] as usize]) {
+            outline.rotate_left(start);
+        }
+        let positions = global.iter().map(|&g| positions[g as usize]).collect();
+        panels.push(Panel { name: p.name.clone(), index, global, positions, triangles: local_tris, outline });
+    }
+    let mut seams = Vec::with_capacity(t.seams.len());
+    for s in &t.seams {
+        let find = |name: &str| {
+            t.panels
+                .iter()
+                .position(|p| p.name == name)
+                .ok_or_else(|| PanelError::UnknownPanel { seam: s.name.clone(), panel: name.to_string() })
+        };
+        let (a, b) = (find(&s.panel_a)?, find(&s.panel_b)?);
+        let chain = seam_chain(t, &lineage, s.name.as_str(), &s.edges)?;
+        for &pi in &[a, b] {
+            let panel = &panels[pi];
+            let on_outline: std::collections::HashSet<u32> =
+                panel.outline.iter().map(|&l| panel.global[l as usize]).collect();
+            if let Some(&off) = chain.iter().find(|g| !on_outline.contains(g)) {
+                let edge = s
+                    .edges
+                    .iter()
+                    .copied()
+                    .find(|&e| {
+                        let e = &t.edges[e as usize];
+                        lineage.chain(e.start, e.end).is_some_and(|c| c.contains(&off))
+                    })
+                    .unwrap_or(0);
+                return Err(PanelError::SeamOffOutline { seam: s.name.clone(), edge, panel: panel.name.clone() });
+            }
+        }
+        seams.push(SeamChain { name: s.name.clone(), panel_a: a, panel_b: b, chain });
+    }
+    Ok((panels, seams, lineage))
+}
+
+/// The fine chain of a seam's coarse edges, oriented so consecutive edges meet.
+fn seam_chain(t: &Template, lineage: &Lineage, seam: &str, edges: &[u32]) -> Result<Vec<u32>, PanelError> {
+    let ends = |e: u32| (t.edges[e as usize].start, t.edges[e as usize].end);
+    let Some(&first) = edges.first() else { return Ok(Vec::new()) };
+    let (mut a, mut b) = ends(first);
+    if let Some(&second) = edges.get(1) {
+        let (c, d) = ends(second);
+        if a == c || a == d {
+            std::mem::swap(&mut a, &mut b);
+        }
+    }
+    let mut chain = lineage.chain(a, b).unwrap_or_else(|| vec![a, b]);
+    let mut tail = b;
+    for w in edges.windows(2) {
+        let (c, d) = ends(w[1]);
+        let next = if c == tail {
+            d
+        } else if d == tail {
+            c
+        } else {
+            return Err(PanelError::SeamNotChained { seam: seam.to_string(), first: w[0], second: w[1] });
+        };
+        let piece = lineage.chain(tail, next).unwrap_or_else(|| vec![tail, next]);
+        chain.extend_from_slice(&piece[1..]);
+        tail = next;
+    }
+    Ok(chain)
+}
+
+/// Boundary loops of a triangle list, each run along its faces' orientation.
+fn boundary_loops(triangles: &[[u32; 3]]) -> Vec<Vec<u32>> {
+    let mut directed: BTreeMap<(u32, u32), usize> = BTreeMap::new();
+    for t in triangles {
+        for k in 0..3 {
+            *directed.entry((t[k], t[(k + 1) % 3])).or_default() += 1;
+        }
+    }
+    // boundary half-edges: no opposite half-edge
+    let mut next: BTreeMap<u32, Vec<u32>> = BTreeMap::new();
+    for &(a, b) in directed.keys() {
+        if !directed.contains_key(&(b, a)) {
+            next.entry(a).or_default().push(b);
+        }
+    }
+    let mut loops = Vec::new();
+    while let Some((&start, _)) = next.iter().find(|(_, v)| !v.is_empty()) {
+        let mut lp = vec![start];
+        let mut at = start;
+        while let Some(to) = next.get_mut(&at).and_then(|v| v.pop()) {
+            if to == start {
+                break;
+            }
+            lp.push(to);
+            at = to;
+        }
+        loops.push(lp);
+    }
+    loops
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::refine::subdivide::{refine, RefineMesh, RefineOptions};
+    use crate::template::codec::decode;
+    use crate::template::format::Relocation;
+    use crate::template::library::{builtin, reference_body};
+    use glam::DVec3;
+
+    #[test]
+    fn lineage_matches_the_split_and_panels_cut_every_template() {
+        let body = reference_body().expect("reference body");
+        for t in builtin().expect("library") {
+            let m0 = decode(&t, &body, Relocation::Eq1Frame).expect("decode");
+            let edges: Vec<(u32, u32)> = t.edges.iter().map(|e| (e.start, e.end)).collect();
+            let levels = 2;
+            let opts = RefineOptions { levels, ..Default::default() };
+            let coarse = RefineMesh::from_coarse(&m0, &edges).expect("coarse");
+            let (fine, _) = refine(coarse, &opts, |_: &mut [DVec3], _: &mut [bool]| {}).expect("refine");
+            let (panels, seams, lineage) = cut(&t, &fine.positions, &fine.triangles, levels).expect("cut");
+            // every coarse edge's chain has 2^L + 1 vertices, and its split vertices lie
+            // on the fine mesh's edges in order
+            let fine_edges: std::collections::HashSet<(u32, u32)> = edge_keys(&fine.triangles).into_iter().collect();
+            for e in &t.edges {
+                let c = lineage.chain(e.start, e.end).expect("coarse edge");
+                assert_eq!(c.len(), 5);
+                assert!(c.windows(2).all(|w| fine_edges.contains(&(w[0].min(w[1]), w[0].max(w[1])))));
+            }
+            // panels partition the faces
+            let total: usize = panels.iter().map(|p| p.triangles.len()).sum();
+            assert_eq!(total, fine.triangles.len(), "{}", t.name);
+            for s in &seams {
+                assert!(s.chain.len() >= 5, "{}: {}", t.name, s.name);
+                // the seam is shared: both panels hold every vertex of the chain
+                for &pi in &[s.panel_a, s.panel_b] {
+                    assert!(s.chain.iter().all(|&g| panels[pi].local(g).is_some()));
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn boundary_loops_of_a_quad_and_an_annulus() {
+        assert_eq!(boundary_loops(&[[0, 1, 2], [0, 2, 3]]), vec![vec![0, 1, 2, 3]]);
+        // a square ring: outer 0..4, inner 4..8
+        let ring = [[0, 1, 5], [0, 5, 4], [1, 2, 6], [1, 6, 5], [2, 3, 7], [2, 7, 6], [3, 0, 4], [3, 4, 7]];
+        assert_eq!(boundary_loops(&ring).len(), 2);
+    }
+
+    #[test]
+    fn wrong_face_count_is_named() {
+        let t = builtin().expect("library").remove(0);
+        let err = cut(&t, &[], &[[0, 1, 2]], 1).unwrap_err();
+        assert!(matches!(err, PanelError::FaceCount { fine: 1, levels: 1, .. }), "{err}");
+    }
+}

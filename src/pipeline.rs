@@ -1,0 +1,137 @@
+//! One grade: a template on a feature body, end to end — decode (seed 000
+//! Eq. 1), refine with collision avoidance (§5, issue #4), the exact final
+//! pass, and the sewing pattern (§6, issue #5).
+//!
+//! Pure core: data in, data out; the body's depth maps come in as an
+//! [`Obstacle`] that the caller renders (and caches) with
+//! [`crate::collide::render::GpuContext`]. Without an obstacle the garment
+//! is refined without collision avoidance. Each stage's wall time is
+//! reported ([`StageTimings`]) for the service's metrics and the fit report.
+//!
+//! **Failure modes** — [`PipelineError`], the failing stage's typed error.
+
+use std::time::Instant;
+
+use serde::{Deserialize, Serialize};
+
+use crate::body::feature::FeatureBody;
+use crate::collide::cache::Obstacle;
+use crate::pattern::garment::{pattern, GarmentPattern, PatternError, PatternOptions};
+use crate::refine::collision::{Collider, CollisionOptions, CollisionReport};
+use crate::refine::subdivide::{refine, LevelReport, RefineError, RefineMesh, RefineOptions};
+use crate::template::codec::{decode, CodecError};
+use crate::template::format::Template;
+
+/// Knobs of one grade. Levels, clearance, seam allowance and relocation
+/// default to the template's `defaults` where the field is `None`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[serde(default)]
+pub struct GradeOptions {
+    /// Subdivision levels (count). Default: the template's (3 for the built-ins).
+    pub levels: Option<usize>,
+    /// Clearance between garment and body, mm. Default: the template's (3).
+    pub clearance_mm: Option<f64>,
+    /// Seam allowance, mm. Default: the template's (10).
+    pub seam_allowance_mm: Option<f64>,
+    /// Fairing (levels/clearance above override its fields).
+    pub refine: RefineOptions,
+    /// Collision avoidance (the clearance above overrides its field).
+    pub collision: CollisionOptions,
+    /// Pattern pieces and flattening (the allowance above overrides its field).
+    pub pattern: PatternOptions,
+}
+
+/// Why a grade failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum PipelineError {
+    /// The template does not fit the body (a feature point is missing).
+    #[error(transparent)]
+    Decode(#[from] CodecError),
+    /// Subdivision failed.
+    #[error(transparent)]
+    Refine(#[from] RefineError),
+    /// The pattern failed.
+    #[error(transparent)]
+    Pattern(#[from] PatternError),
+}
+
+/// Wall time per stage, ms.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct StageTimings {
+    /// Decoding the template onto the body.
+    pub decode_ms: f64,
+    /// Subdivision, fairing and collision avoidance.
+    pub refine_ms: f64,
+    /// Cutting, flattening and assembling the pattern.
+    pub pattern_ms: f64,
+}
+
+/// A graded garment.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Graded {
+    /// The refined garment `M_L` (metres).
+    pub mesh: RefineMesh,
+    /// Fairing per level.
+    pub levels: Vec<LevelReport>,
+    /// What collision avoidance did (zeros without an obstacle).
+    pub collision: CollisionReport,
+    /// The sewing pattern.
+    pub pattern: GarmentPattern,
+    /// Wall time per stage.
+    pub timings: StageTimings,
+}
+
+fn ms(since: Instant) -> f64 {
+    since.elapsed().as_secs_f64() * 1e3
+}
+
+/// Grades `t` onto `body` (module docs); `size` names the result.
+///
+/// # Errors
+/// [`PipelineError`].
+pub fn grade(
+    t: &Template,
+    body: &FeatureBody,
+    obstacle: Option<&Obstacle>,
+    size: &str,
+    opts: &GradeOptions,
+) -> Result<Graded, PipelineError> {
+    let levels = opts.levels.unwrap_or(t.defaults.levels as usize);
+    let clearance_mm = opts.clearance_mm.unwrap_or(t.defaults.clearance_mm);
+    let refine_opts = RefineOptions { levels, ..opts.refine };
+    let collision_opts = CollisionOptions { clearance_mm, ..opts.collision };
+    let mut pattern_opts = opts.pattern;
+    pattern_opts.piece.seam_allowance_mm = opts.seam_allowance_mm.unwrap_or(t.defaults.seam_allowance_mm);
+
+    let start = Instant::now();
+    let m0 = decode(t, body, t.defaults.relocation)?;
+    let edges: Vec<(u32, u32)> = t.edges.iter().map(|e| (e.start, e.end)).collect();
+    let coarse = RefineMesh::from_coarse(&m0, &edges)?;
+    let decode_ms = ms(start);
+
+    let start = Instant::now();
+    let (mesh, level_reports, collision) = match obstacle {
+        Some(ob) => {
+            let mut collider = Collider::new(&ob.maps, collision_opts);
+            let (mut mesh, reports) = refine(coarse, &refine_opts, |p, h| collider.after_sweep(p, h))?;
+            collider.settle(&ob.tree, &mut mesh.positions, &mesh.fixed);
+            (mesh, reports, collider.report)
+        }
+        None => {
+            let (mesh, reports) = refine(coarse, &refine_opts, |_, _| {})?;
+            (mesh, reports, CollisionReport::default())
+        }
+    };
+    let refine_ms = ms(start);
+
+    let start = Instant::now();
+    let pattern = pattern(t, &mesh.positions, &mesh.triangles, levels, size, &pattern_opts)?;
+    let pattern_ms = ms(start);
+    Ok(Graded {
+        mesh,
+        levels: level_reports,
+        collision,
+        pattern,
+        timings: StageTimings { decode_ms, refine_ms, pattern_ms },
+    })
+}

@@ -1,0 +1,254 @@
+//! The template library's persistent store: [redb](https://docs.rs/redb), an
+//! embedded, pure-Rust, ACID key-value store (copy-on-write B-trees, one
+//! writer, many readers; a committed write transaction is fsynced before
+//! `commit` returns, so a template answered with 201 survives `kill -9`).
+//! Chosen over SQLite (a C dependency and SQL for what is a two-table
+//! key-value job) and sled (unmaintained, no stable on-disk format).
+//!
+//! Layout: `versions: (name, version) → template JSON` keeps every
+//! version; `current: name → version` points at the live one; `meta`
+//! records that the built-in templates were seeded (so a library whose
+//! built-ins were deleted stays that way after a restart).
+//!
+//! Every template is validated ([`Template::from_json`]) before it is
+//! written. Failure modes: [`StoreError`].
+
+use std::path::Path;
+
+use redb::{Database, ReadableTable, TableDefinition};
+
+use crate::template::format::{Template, TemplateError};
+
+const VERSIONS: TableDefinition<(&str, u32), &[u8]> = TableDefinition::new("versions");
+const CURRENT: TableDefinition<&str, u32> = TableDefinition::new("current");
+const META: TableDefinition<&str, u64> = TableDefinition::new("meta");
+const SEEDED: &str = "seeded_builtins";
+
+/// Why a store operation failed.
+#[derive(Debug, thiserror::Error)]
+pub enum StoreError {
+    /// The database could not be opened, read or written.
+    #[error("template store: {0}")]
+    Database(String),
+    /// The template is invalid.
+    #[error(transparent)]
+    Invalid(#[from] TemplateError),
+    /// No template of that name (or version).
+    #[error("no template '{name}'{}", version.map(|v| format!(" version {v}")).unwrap_or_default())]
+    NotFound {
+        /// Name asked for.
+        name: String,
+        /// Version asked for.
+        version: Option<u32>,
+    },
+    /// A create for a name that exists.
+    #[error("template '{0}' exists; replace it with PUT to make a new version")]
+    Exists(String),
+    /// The body's name differs from the path's.
+    #[error("template name '{body}' differs from the name in the path '{path}'")]
+    NameMismatch {
+        /// Name in the path.
+        path: String,
+        /// Name in the body.
+        body: String,
+    },
+}
+
+fn db<E: std::fmt::Display>(e: E) -> StoreError {
+    StoreError::Database(e.to_string())
+}
+
+/// A template's name and live version.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct Entry {
+    /// Template name.
+    pub name: String,
+    /// Live version (1 for the first).
+    pub version: u32,
+}
+
+/// The template store.
+#[derive(Debug)]
+pub struct TemplateStore {
+    db: Database,
+}
+
+impl TemplateStore {
+    /// Opens (or creates) the store at `path` and seeds `builtins` on first start.
+    ///
+    /// # Errors
+    /// [`StoreError::Database`].
+    pub fn open(path: &Path, builtins: &[Template]) -> Result<Self, StoreError> {
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(db)?;
+        }
+        let db = Database::create(path).map_err(db)?;
+        let store = Self { db };
+        store.seed(builtins)?;
+        Ok(store)
+    }
+
+    fn seed(&self, builtins: &[Template]) -> Result<(), StoreError> {
+        let tx = self.db.begin_write().map_err(db)?;
+        {
+            let mut meta = tx.open_table(META).map_err(db)?;
+            let seeded = meta.get(SEEDED).map_err(db)?.is_some();
+            let mut versions = tx.open_table(VERSIONS).map_err(db)?;
+            let mut current = tx.open_table(CURRENT).map_err(db)?;
+            if !seeded {
+                for t in builtins {
+                    if current.get(t.name.as_str()).map_err(db)?.is_none() {
+                        versions.insert((t.name.as_str(), 1), t.to_json().as_bytes()).map_err(db)?;
+                        current.insert(t.name.as_str(), 1).map_err(db)?;
+                    }
+                }
+                meta.insert(SEEDED, 1).map_err(db)?;
+            }
+        }
+        tx.commit().map_err(db)
+    }
+
+    /// Every live template, by name.
+    ///
+    /// # Errors
+    /// [`StoreError::Database`].
+    pub fn list(&self) -> Result<Vec<Entry>, StoreError> {
+        let tx = self.db.begin_read().map_err(db)?;
+        let current = tx.open_table(CURRENT).map_err(db)?;
+        current
+            .iter()
+            .map_err(db)?
+            .map(|r| r.map(|(k, v)| Entry { name: k.value().to_string(), version: v.value() }).map_err(db))
+            .collect()
+    }
+
+    /// A template (the live version, or `version`) as stored JSON.
+    ///
+    /// # Errors
+    /// [`StoreError::NotFound`], [`StoreError::Database`].
+    pub fn get_json(&self, name: &str, version: Option<u32>) -> Result<(u32, String), StoreError> {
+        let not_found = || StoreError::NotFound { name: name.to_string(), version };
+        let tx = self.db.begin_read().map_err(db)?;
+        let v = match version {
+            Some(v) => v,
+            None => tx.open_table(CURRENT).map_err(db)?.get(name).map_err(db)?.ok_or_else(not_found)?.value(),
+        };
+        let versions = tx.open_table(VERSIONS).map_err(db)?;
+        let bytes = versions.get((name, v)).map_err(db)?.ok_or_else(not_found)?;
+        Ok((v, String::from_utf8_lossy(bytes.value()).into_owned()))
+    }
+
+    /// A template, parsed and validated.
+    ///
+    /// # Errors
+    /// As [`TemplateStore::get_json`]; [`StoreError::Invalid`] if the stored JSON no longer validates.
+    pub fn get(&self, name: &str, version: Option<u32>) -> Result<(u32, Template), StoreError> {
+        let (v, json) = self.get_json(name, version)?;
+        Ok((v, Template::from_json(&json)?))
+    }
+
+    /// Stores `json` as a new template (`create`) or a new version of an existing one.
+    /// Returns the version written. Durable when this returns.
+    ///
+    /// # Errors
+    /// [`StoreError::Invalid`], [`StoreError::Exists`] (create of an existing name),
+    /// [`StoreError::NotFound`] (replace of a missing name), [`StoreError::NameMismatch`].
+    pub fn put(&self, path_name: Option<&str>, json: &str, create: bool) -> Result<Entry, StoreError> {
+        let t = Template::from_json(json)?;
+        if let Some(p) = path_name.filter(|p| *p != t.name) {
+            return Err(StoreError::NameMismatch { path: p.to_string(), body: t.name.clone() });
+        }
+        let tx = self.db.begin_write().map_err(db)?;
+        let version;
+        {
+            let mut current = tx.open_table(CURRENT).map_err(db)?;
+            let live = current.get(t.name.as_str()).map_err(db)?.map(|v| v.value());
+            let mut versions = tx.open_table(VERSIONS).map_err(db)?;
+            // a new version number above every version ever stored under the name
+            let highest = {
+                let last = versions.range((t.name.as_str(), 0)..=(t.name.as_str(), u32::MAX)).map_err(db)?.next_back();
+                match last {
+                    Some(r) => r.map_err(db)?.0.value().1,
+                    None => 0,
+                }
+            };
+            match (create, live) {
+                (true, Some(_)) => return Err(StoreError::Exists(t.name.clone())),
+                (false, None) => return Err(StoreError::NotFound { name: t.name.clone(), version: None }),
+                _ => {}
+            }
+            version = highest + 1;
+            versions.insert((t.name.as_str(), version), t.to_json().as_bytes()).map_err(db)?;
+            current.insert(t.name.as_str(), version).map_err(db)?;
+        }
+        tx.commit().map_err(db)?;
+        Ok(Entry { name: t.name, version })
+    }
+
+    /// Deletes a template (every version stays readable by number; the name is freed).
+    ///
+    /// # Errors
+    /// [`StoreError::NotFound`], [`StoreError::Database`].
+    pub fn delete(&self, name: &str) -> Result<(), StoreError> {
+        let tx = self.db.begin_write().map_err(db)?;
+        {
+            let mut current = tx.open_table(CURRENT).map_err(db)?;
+            if current.remove(name).map_err(db)?.is_none() {
+                return Err(StoreError::NotFound { name: name.to_string(), version: None });
+            }
+        }
+        tx.commit().map_err(db)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::template::library::builtin;
+
+    fn temp(name: &str) -> std::path::PathBuf {
+        let p = std::env::temp_dir().join(format!("grade3d-store-{}-{name}.redb", std::process::id()));
+        let _ = std::fs::remove_file(&p);
+        p
+    }
+
+    #[test]
+    fn seed_create_replace_delete_and_reopen() {
+        let path = temp("crud");
+        let lib = builtin().expect("library");
+        let store = TemplateStore::open(&path, &lib).expect("open");
+        let names: Vec<String> = store.list().unwrap().into_iter().map(|e| e.name).collect();
+        assert_eq!(names, ["fitted-bodice", "straight-skirt", "trousers"]);
+        let (v, skirt) = store.get("straight-skirt", None).unwrap();
+        assert_eq!((v, &skirt), (1, &lib[0]));
+        // replace: version 2; the old version stays readable
+        let mut edited = skirt.clone();
+        edited.description = "shorter".into();
+        let e = store.put(Some("straight-skirt"), &edited.to_json(), false).unwrap();
+        assert_eq!(e.version, 2);
+        assert_eq!(store.get("straight-skirt", Some(1)).unwrap().1, skirt);
+        // create of an existing name, replace of a missing one, name mismatch, invalid JSON
+        assert!(matches!(store.put(None, &edited.to_json(), true), Err(StoreError::Exists(_))));
+        let mut other = edited.clone();
+        other.name = "mini-skirt".into();
+        assert!(matches!(store.put(None, &other.to_json(), false), Err(StoreError::NotFound { .. })));
+        assert!(matches!(store.put(Some("x"), &other.to_json(), true), Err(StoreError::NameMismatch { .. })));
+        assert!(matches!(store.put(None, "{}", true), Err(StoreError::Invalid(_))));
+        assert_eq!(store.put(None, &other.to_json(), true).unwrap().version, 1);
+        store.delete("trousers").unwrap();
+        assert!(matches!(store.delete("trousers"), Err(StoreError::NotFound { .. })));
+        drop(store);
+        // reopen: deleted built-ins are not re-seeded, writes persisted
+        let store = TemplateStore::open(&path, &lib).expect("reopen");
+        let entries = store.list().unwrap();
+        assert_eq!(
+            entries,
+            vec![
+                Entry { name: "fitted-bodice".into(), version: 1 },
+                Entry { name: "mini-skirt".into(), version: 1 },
+                Entry { name: "straight-skirt".into(), version: 2 },
+            ]
+        );
+        let _ = std::fs::remove_file(&path);
+    }
+}
