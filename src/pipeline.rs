@@ -1,6 +1,6 @@
 //! One grade: a template on a feature body, end to end — decode (seed 000
-//! Eq. 1), refine with collision avoidance (§5, issue #4), the exact final
-//! pass, and the sewing pattern (§6, issue #5).
+//! Eq. 1), refine with collision avoidance (§5, issue #4), tangential
+//! relaxation, the exact final pass, and the sewing pattern (§6, issue #5).
 //!
 //! Pure core: data in, data out; the body's depth maps come in as an
 //! [`Obstacle`] that the caller renders (and caches) with
@@ -18,7 +18,7 @@ use crate::body::feature::FeatureBody;
 use crate::collide::cache::Obstacle;
 use crate::pattern::garment::{pattern, GarmentPattern, PatternError, PatternOptions};
 use crate::refine::collision::{Collider, CollisionOptions, CollisionReport};
-use crate::refine::subdivide::{refine, LevelReport, RefineError, RefineMesh, RefineOptions};
+use crate::refine::subdivide::{refine, relax_tangentially, LevelReport, RefineError, RefineMesh, RefineOptions};
 use crate::template::codec::{decode, CodecError};
 use crate::template::format::Template;
 
@@ -114,11 +114,13 @@ pub fn grade(
         Some(ob) => {
             let mut collider = Collider::new(&ob.maps, collision_opts);
             let (mut mesh, reports) = refine(coarse, &refine_opts, |p, h| collider.after_sweep(p, h))?;
+            relax_tangentially(&mut mesh, refine_opts.relax_sweeps, refine_opts.relax_step)?;
             collider.settle(&ob.tree, &mut mesh.positions, &mesh.fixed);
             (mesh, reports, collider.report)
         }
         None => {
-            let (mesh, reports) = refine(coarse, &refine_opts, |_, _| {})?;
+            let (mut mesh, reports) = refine(coarse, &refine_opts, |_, _| {})?;
+            relax_tangentially(&mut mesh, refine_opts.relax_sweeps, refine_opts.relax_step)?;
             (mesh, reports, CollisionReport::default())
         }
     };

@@ -14,7 +14,9 @@
 //!
 //! **Sew line** — the panel's outline. **Corners** (turn points) — template
 //! nodes on the outline where a seam starts or ends, or where the outline
-//! turns by more than [`PieceOptions::corner_angle_deg`].
+//! turns by more than [`PieceOptions::corner_angle_deg`]. **Grade points** —
+//! every template node on the outline (the same set in every size) and the
+//! notches.
 //!
 //! **Cut line** — the sew line offset outwards by the seam allowance `s`:
 //! each edge moved by `s` along its outward normal `n = (d_y, −d_x)/|d|`
@@ -190,7 +192,7 @@ pub fn assemble(
         })
         .collect();
     let allowance = opts.seam_allowance_mm;
-    let cut_line = offset_polygon(&sew_line, allowance, opts.miter_limit);
+    let cut_line = untangle(offset_polygon(&sew_line, allowance, opts.miter_limit));
 
     // labels: the node's feature point, with the node id where a panel repeats it
     let mut count: BTreeMap<&str, usize> = BTreeMap::new();
@@ -208,9 +210,11 @@ pub fn assemble(
         }
     };
     let mut notches = Vec::new();
-    let mut grade_points: Vec<GradePoint> = corners
-        .iter()
-        .map(|&k| GradePoint {
+    // grade points: every template node on the sew line (the same set in every size,
+    // whatever the local turning angle), then the notches
+    let mut grade_points: Vec<GradePoint> = (0..n)
+        .filter(|&k| global_of(k) < n_nodes)
+        .map(|k| GradePoint {
             node: global_of(k),
             label: label(global_of(k)),
             at: sew_line[k],
@@ -333,6 +337,47 @@ pub fn offset_polygon(poly: &[DVec2], d: f64, miter_limit: f64) -> Vec<DVec2> {
     out
 }
 
+/// Removes the loops an offset makes where the sew line bends inwards more
+/// tightly than the allowance (a concave curve of radius < `s`, a reflex
+/// corner): at each crossing of two edges the polygon splits in two, and the
+/// part with the larger counter-clockwise area is kept. Stops when no edges
+/// cross (or after `n` cuts).
+pub fn untangle(mut poly: Vec<DVec2>) -> Vec<DVec2> {
+    for _ in 0..poly.len() {
+        let n = poly.len();
+        let mut cut = None;
+        'find: for i in 0..n {
+            for j in i + 2..n {
+                if i == 0 && j == n - 1 {
+                    continue;
+                }
+                let (a, b, c, d) = (poly[i], poly[(i + 1) % n], poly[j], poly[(j + 1) % n]);
+                if segments_intersect(a, b, c, d) {
+                    cut = Some((i, j, crossing_point(a, b, c, d)));
+                    break 'find;
+                }
+            }
+        }
+        let Some((i, j, x)) = cut else { break };
+        // inner: x, i+1 ..= j; outer: 0 ..= i, x, j+1 .. n
+        let inner: Vec<DVec2> = std::iter::once(x).chain(poly[i + 1..=j].iter().copied()).collect();
+        let outer: Vec<DVec2> =
+            poly[..=i].iter().copied().chain(std::iter::once(x)).chain(poly[j + 1..].iter().copied()).collect();
+        poly = if signed_area(&inner) > signed_area(&outer) { inner } else { outer };
+    }
+    poly
+}
+
+/// Where the lines through `a b` and `c d` cross (the midpoint of `b c` if parallel).
+fn crossing_point(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> DVec2 {
+    let (r, s) = (b - a, d - c);
+    let den = r.perp_dot(s);
+    if den.abs() <= f64::EPSILON {
+        return 0.5 * (b + c);
+    }
+    a + r * ((c - a).perp_dot(s) / den)
+}
+
 /// Length of an open polyline.
 pub fn polyline_length(p: &[DVec2]) -> f64 {
     p.windows(2).map(|w| w[0].distance(w[1])).sum()
@@ -381,4 +426,45 @@ fn segments_intersect(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> bool {
         o(p, q, r) == 0.0 && r.x >= p.x.min(q.x) && r.x <= p.x.max(q.x) && r.y >= p.y.min(q.y) && r.y <= p.y.max(q.y)
     };
     on(c, d, a) || on(c, d, b) || on(a, b, c) || on(a, b, d)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn offset_of_a_square_is_mitred_and_a_notched_outline_untangles() {
+        let sq = vec![DVec2::ZERO, DVec2::new(100.0, 0.0), DVec2::new(100.0, 100.0), DVec2::new(0.0, 100.0)];
+        let off = offset_polygon(&sq, 10.0, 3.0);
+        assert_eq!(
+            off,
+            vec![
+                DVec2::new(-10.0, -10.0),
+                DVec2::new(110.0, -10.0),
+                DVec2::new(110.0, 110.0),
+                DVec2::new(-10.0, 110.0)
+            ]
+        );
+        assert!((signed_area(&off) - 120.0 * 120.0).abs() < 1e-9);
+        // a slit 4 mm wide and 50 mm deep into the top edge: offsetting by 10 mm
+        // folds the slit's walls over each other; untangling leaves a clean outline
+        let slit = vec![
+            DVec2::ZERO,
+            DVec2::new(100.0, 0.0),
+            DVec2::new(100.0, 100.0),
+            DVec2::new(52.0, 100.0),
+            DVec2::new(50.0, 50.0),
+            DVec2::new(48.0, 100.0),
+            DVec2::new(0.0, 100.0),
+        ];
+        let raw = offset_polygon(&slit, 10.0, 3.0);
+        assert!(self_intersects(&raw));
+        let clean = untangle(raw);
+        assert!(!self_intersects(&clean));
+        assert!(signed_area(&clean) > 100.0 * 100.0);
+        assert!(
+            !self_intersects(&sq)
+                && self_intersects(&[DVec2::ZERO, DVec2::ONE, DVec2::new(1.0, 0.0), DVec2::new(0.0, 1.0)])
+        );
+    }
 }

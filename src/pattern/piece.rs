@@ -1,7 +1,8 @@
 //! Pattern pieces in 2D at true scale (millimetres), what the exports
 //! ([`super::export`]) write and the grade rules ([`super::grade`]) compare.
 //!
-//! Conventions: x to the right, y up (the grain line runs along +y), lengths
+//! Conventions: x to the right, y up (the grain line runs along −y, down the
+//! body, so pieces are upright), lengths
 //! in mm; polygons are closed implicitly (the last point is not repeated)
 //! and counter-clockwise; every piece is placed so that its stack point
 //! ([`PatternPiece::stack_point`]) is the origin.
@@ -40,7 +41,8 @@ pub struct GradePoint {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum GradePointKind {
-    /// A corner of the sew line (AAMA layer 2 turn point).
+    /// A template node on the sew line: a turn point, or a curve point that is
+    /// graded (every template node on the outline is one).
     Corner,
     /// A notch (AAMA layer 4).
     Notch,
@@ -76,7 +78,7 @@ pub struct PatternPiece {
     pub seam_allowance_mm: f64,
     /// Notches.
     pub notches: Vec<PieceNotch>,
-    /// Grain line, start and end (parallel to +y), mm.
+    /// Grain line, start and end (parallel to the y axis, pointing down), mm.
     pub grain: [DVec2; 2],
     /// Internal lines.
     pub internal_lines: Vec<InternalLine>,

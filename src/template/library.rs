@@ -15,7 +15,7 @@
 
 use std::collections::BTreeMap;
 
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
 use super::codec::{encode, CodecError, Draft, DraftPanel, DraftSeam};
@@ -170,7 +170,7 @@ impl<'a> Builder<'a> {
     /// each tied to its point and eased outwards by `ease_mm / 2π`. Every
     /// ring edge gets a profile along the eased girth.
     fn ring(&mut self, curve: CurveId, points: &[PointId], ease_mm: f64) -> Result<Ring, AuthorError> {
-        let loop_ = self.curve(curve)?.clone();
+        let loop_ = bridged(self.curve(curve)?);
         let mut params = Vec::with_capacity(points.len());
         for id in points {
             let p = self.point(*id)?;
@@ -305,6 +305,48 @@ impl<'a> Builder<'a> {
 
 /// A point of a girth at arc length `s`, moved outwards horizontally (away
 /// from the girth's centroid) by `radial`.
+/// The girth with its concavities bridged, as a tape measure (and cloth)
+/// bridges them: every point inside the convex hull of the girth's
+/// horizontal projection is moved radially (from the centroid) out to the
+/// hull; heights are kept. Garments do not follow the gluteal cleft or the
+/// cleavage, and a ring that did would fold the cloth there.
+fn bridged(loop_: &Polyline) -> Polyline {
+    let c = loop_.centroid();
+    let flat: Vec<DVec2> = loop_.points.iter().map(|p| DVec2::new(p.x - c.x, p.z - c.z)).collect();
+    let hull = crate::geom::polyline::convex_hull_2d(&flat);
+    let m = hull.len();
+    if m < 3 {
+        return loop_.clone();
+    }
+    let points = loop_
+        .points
+        .iter()
+        .zip(&flat)
+        .map(|(p, q)| {
+            let dir = q.normalize_or_zero();
+            // the ray from the centroid through q leaves the hull at the largest t
+            // with t·dir on an edge
+            let mut reach = q.length();
+            for i in 0..m {
+                let (a, b) = (hull[i], hull[(i + 1) % m]);
+                let e = b - a;
+                let den = dir.perp_dot(e);
+                if den.abs() <= f64::EPSILON {
+                    continue;
+                }
+                let t = a.perp_dot(e) / den;
+                let u = a.perp_dot(dir) / den;
+                if t > 0.0 && (-1e-12..=1.0 + 1e-12).contains(&u) {
+                    reach = reach.max(t);
+                }
+            }
+            let out = dir * reach;
+            DVec3::new(c.x + out.x, p.y, c.z + out.y)
+        })
+        .collect();
+    Polyline::new(points, loop_.closed)
+}
+
 fn eased(loop_: &Polyline, s: f64, radial: f64) -> DVec3 {
     let p = loop_.point_at(s);
     let c = loop_.centroid();
