@@ -73,7 +73,8 @@ pub struct FlattenOptions {
     /// iteration (dimensionless). Default 1e-7.
     pub tolerance: f64,
     /// Weight of the boundary-edge springs relative to the cotangent weights
-    /// (dimensionless; 0 is plain ARAP). Default 10.
+    /// (dimensionless; 0 is plain ARAP). Default 2: on the library garments it keeps
+    /// every skirt and trouser piece within |E_s| ≤ 1.6 % (10 gave up to 2.2 %).
     pub boundary_weight: f64,
     /// A triangle whose area is below this fraction of the squared longest
     /// edge is degenerate (dimensionless). Default 1e-12.
@@ -101,7 +102,7 @@ impl Default for FlattenOptions {
         Self {
             max_iterations: 100,
             tolerance: 1e-7,
-            boundary_weight: 10.0,
+            boundary_weight: 2.0,
             degenerate_area: 1e-12,
             exact_boundary: true,
             truing_iterations: 20,

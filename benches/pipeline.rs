@@ -1,0 +1,48 @@
+//! One grade end to end (issues #5 and #6): the straight skirt on the
+//! reference body — decode, 3 levels with collision and the exact pass,
+//! flattening and pieces, SVG and DXF exports — and each stage alone.
+//! Run: `cargo bench --bench pipeline`.
+#![expect(missing_docs, reason = "criterion_group! generates undocumented items")]
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use grade3d::collide::cache::Obstacle;
+use grade3d::collide::render::{GpuContext, RenderOptions};
+use grade3d::geom::winding::{WindingOptions, WindingTree};
+use grade3d::pattern::export::{dxf, svg};
+use grade3d::pattern::garment::{pattern, PatternOptions};
+use grade3d::pipeline::{grade, GradeOptions};
+use grade3d::template::library::{builtin, reference_body};
+
+fn benches(c: &mut Criterion) {
+    let body = reference_body().expect("reference body");
+    let t = builtin().expect("library").into_iter().next().expect("skirt");
+    let obstacle = GpuContext::new().ok().map(|gpu| Obstacle {
+        maps: gpu.render(&body.mesh, &RenderOptions::default()).expect("render"),
+        tree: WindingTree::new(&body.mesh, &WindingOptions::default()),
+    });
+    let opts = GradeOptions::default();
+    let graded = grade(&t, &body, obstacle.as_ref(), "reference", &opts).expect("grade");
+    eprintln!("stage timings of one grade: {:?}", graded.timings);
+    let mut g = c.benchmark_group("grade_skirt");
+    g.sample_size(10);
+    g.bench_function("decode_refine_pattern", |b| {
+        b.iter(|| grade(&t, &body, obstacle.as_ref(), "reference", &opts).expect("grade"))
+    });
+    g.bench_function("pattern_only", |b| {
+        b.iter(|| {
+            pattern(&t, &graded.mesh.positions, &graded.mesh.triangles, 3, "reference", &PatternOptions::default())
+                .expect("pattern")
+        })
+    });
+    g.bench_function("exports_svg_dxf", |b| {
+        b.iter(|| {
+            let s = svg::pieces_svg(&graded.pattern.pieces, &Default::default());
+            let d = dxf::pieces_dxf(&t.name, &graded.pattern.pieces, &Default::default()).expect("dxf");
+            (s, d)
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(pipeline_benches, benches);
+criterion_main!(pipeline_benches);
