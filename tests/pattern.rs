@@ -11,7 +11,7 @@ use std::path::PathBuf;
 use grade3d::body::derive::{derive_features, DeriveOptions};
 use grade3d::collide::cache::Obstacle;
 use grade3d::collide::render::{GpuContext, RenderOptions};
-use grade3d::geom::winding::{WindingOptions, WindingTree};
+use grade3d::geom::winding::{penetration_stats, WindingOptions, WindingTree};
 use grade3d::pattern::export::{dxf, rul, svg};
 use grade3d::pattern::grade::{grade_rules, nests};
 use grade3d::pattern::piece::PatternPiece;
@@ -67,6 +67,11 @@ fn patterns_on_every_body_meet_the_bars() {
         for t in &library {
             let g = grade(t, &body, Some(&obstacle), &size, &GradeOptions::default())
                 .unwrap_or_else(|e| panic!("{} on {name}: {e}", t.name));
+            // the pipeline's garment (relaxed, then the exact pass) stays outside the body
+            let free: Vec<glam::DVec3> =
+                g.mesh.positions.iter().zip(&g.mesh.fixed).filter(|(_, f)| !**f).map(|(p, _)| *p).collect();
+            let pen = penetration_stats(&obstacle.tree, &free);
+            assert_eq!(pen.inside, 0, "{} on {name}: {pen:?}", t.name);
             timing[0] += g.timings.decode_ms;
             timing[1] += g.timings.refine_ms;
             timing[2] += g.timings.pattern_ms;

@@ -129,6 +129,9 @@ impl<'a> Collider<'a> {
     }
 }
 
+/// Steps of the exact pass per vertex before giving up on it.
+const SETTLE_TRIES: usize = 4;
+
 /// The exact final pass (module docs): every vertex not `fixed` that `tree`
 /// finds inside the body goes to its closest body point plus `clearance_mm`
 /// outward. Returns how many moved. A vertex exactly on the surface has no
@@ -140,10 +143,18 @@ pub fn settle_exact(tree: &WindingTree, positions: &mut [DVec3], fixed: &[bool],
         if f || !tree.is_inside(*p) {
             continue;
         }
-        let (q, _, d) = tree.closest_point(*p);
-        if d > 0.0 && d.is_finite() {
+        moved += 1;
+        // where two parts of the body are close (under the arm) the clearance step
+        // can land inside the other part: step again from there
+        for _ in 0..SETTLE_TRIES {
+            let (q, _, d) = tree.closest_point(*p);
+            if !(d > 0.0 && d.is_finite()) {
+                break;
+            }
             *p = q + (q - *p) / d * clearance;
-            moved += 1;
+            if !tree.is_inside(*p) {
+                break;
+            }
         }
     }
     moved
