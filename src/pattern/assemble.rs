@@ -12,7 +12,8 @@
 //! (grain lines run down the body, so the piece is upright) and translated
 //! so that the grain line's `from` node — the **stack point** — is the origin.
 //!
-//! **Sew line** — the panel's outline. **Corners** (turn points) — template
+//! **Sew line** — the panel's outline, with each dart closed (straight across
+//! its opening; the legs become an internal line). **Corners** (turn points) — template
 //! nodes on the outline where a seam starts or ends, or where the outline
 //! turns by more than [`PieceOptions::corner_angle_deg`]. **Grade points** —
 //! every template node on the outline (the same set in every size) and the
@@ -153,7 +154,8 @@ pub fn assemble(
     let node_local = |node: u32| panel.local(node).ok_or(PieceError::GrainOffPanel { panel: name(), node });
     let (from, to) = (node_local(template_panel.grain.from)?, node_local(template_panel.grain.to)?);
     let mut pts: Vec<DVec2> = uv.iter().map(|p| *p * MM_PER_M).collect();
-    let outline_pts: Vec<DVec2> = panel.outline.iter().map(|&l| pts[l as usize]).collect();
+    let rim = panel.rim();
+    let outline_pts: Vec<DVec2> = rim.iter().map(|&l| pts[l as usize]).collect();
     if signed_area(&outline_pts) < 0.0 {
         pts.iter_mut().for_each(|p| p.x = -p.x);
     }
@@ -167,8 +169,8 @@ pub fn assemble(
     let pts: Vec<DVec2> = pts.iter().map(|&p| rot.rotate(p - origin)).collect();
 
     let n_nodes = t.nodes.len() as u32;
-    let sew_line: Vec<DVec2> = panel.outline.iter().map(|&l| pts[l as usize]).collect();
-    let global_of = |k: usize| panel.global[panel.outline[k] as usize];
+    let sew_line: Vec<DVec2> = rim.iter().map(|&l| pts[l as usize]).collect();
+    let global_of = |k: usize| panel.global[rim[k] as usize];
     // seam ends (template nodes) touching this panel
     let seam_ends: HashSet<u32> = seams
         .iter()
@@ -212,8 +214,9 @@ pub fn assemble(
     let mut notches = Vec::new();
     // grade points: every template node on the sew line (the same set in every size,
     // whatever the local turning angle), then the notches
+    let mut seen = HashSet::new();
     let mut grade_points: Vec<GradePoint> = (0..n)
-        .filter(|&k| global_of(k) < n_nodes)
+        .filter(|&k| global_of(k) < n_nodes && seen.insert(global_of(k)))
         .map(|k| GradePoint {
             node: global_of(k),
             label: label(global_of(k)),
@@ -228,7 +231,12 @@ pub fn assemble(
         notches.push(PieceNotch { name: notch.name.clone(), at, outward, on_cut_line: at + outward * allowance });
         grade_points.push(GradePoint { node: notch.node, label: label(notch.node), at, kind: GradePointKind::Notch });
     }
-    let internal_lines = internal_lines(t, panel, lineage, &pts);
+    let mut internal_lines = internal_lines(t, panel, lineage, &pts);
+    for d in &panel.darts {
+        // the dart's legs, opening → apex → opening
+        let points = d.a.iter().chain(d.b.iter().rev().skip(1)).map(|&l| pts[l as usize]).collect();
+        internal_lines.push(InternalLine { name: d.name.clone(), points });
+    }
     let grain_len = grain.length();
     let piece = PatternPiece {
         name: panel.name.clone(),

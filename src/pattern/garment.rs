@@ -14,7 +14,8 @@
 //! * self-intersection of the sew and cut lines.
 //!
 //! Per seam ([`SeamReport`]): both sides' sew-line lengths, their mismatch,
-//! and the notch-distance mismatch.
+//! and the notch-distance mismatch; each dart's two legs are reported the
+//! same way (they are sewn to each other).
 //!
 //! **Failure modes** — [`PatternError`], wrapping the stage's error with
 //! the panel it concerns.
@@ -136,6 +137,7 @@ pub fn pattern(
             .iter()
             .filter(|s| s.panel_a == panel.index || s.panel_b == panel.index)
             .filter_map(|s| s.chain.iter().map(|&g| panel.local(g)).collect::<Option<Vec<u32>>>())
+            .chain(panel.darts.iter().flat_map(|d| [d.a.clone(), d.b.clone()]))
             .collect();
         let flat = flatten_with_seams(&panel.positions, &panel.triangles, &chains, &opts.flatten)
             .map_err(|source| PatternError::Flatten { panel: panel.name.clone(), source })?;
@@ -194,6 +196,24 @@ pub fn pattern(
             }
         })
         .collect();
+    let mut seam_reports: Vec<SeamReport> = seam_reports;
+    for (pi, panel) in panels.iter().enumerate() {
+        for d in &panel.darts {
+            let leg = |ids: &[u32]| -> Vec<DVec2> { ids.iter().map(|&l| placed[pi].uv_mm[l as usize]).collect() };
+            let (la, lb) = (polyline_length(&leg(&d.a)), polyline_length(&leg(&d.b)));
+            let chain_3d: Vec<DVec3> = d.a.iter().map(|&l| panel.positions[l as usize]).collect();
+            seam_reports.push(SeamReport {
+                name: d.name.clone(),
+                piece_a: panel.name.clone(),
+                piece_b: panel.name.clone(),
+                length_3d_mm: polyline_length_3d(&chain_3d) * 1e3,
+                length_a_mm: la,
+                length_b_mm: lb,
+                mismatch_mm: (la - lb).abs(),
+                notch_mismatch_mm: 0.0,
+            });
+        }
+    }
     Ok(GarmentPattern { style: t.name.clone(), size: size.to_string(), pieces, reports, seams: seam_reports })
 }
 
@@ -230,9 +250,10 @@ fn hotspot(t: &Template, panel: &super::panels::Panel, uv_mm: &[DVec2]) -> Optio
 
 /// Straightness of the waist line on the sew line (module docs).
 fn waist_deviation(t: &Template, panel: &super::panels::Panel, piece: &PatternPiece) -> Option<f64> {
-    let n = panel.outline.len();
+    let rim = panel.rim();
+    let n = rim.len();
     let kind = |k: usize| -> Option<bool> {
-        let g = panel.global[panel.outline[k] as usize] as usize;
+        let g = panel.global[rim[k] as usize] as usize;
         t.nodes.get(g).map(|node| node.point.as_str().starts_with("waist_"))
     };
     // start just after a coarse node that is not on the waist, so the waist run is contiguous
@@ -245,4 +266,60 @@ fn waist_deviation(t: &Template, panel: &super::panels::Panel, piece: &PatternPi
     }
     let line: Vec<DVec2> = (0..=span).map(|i| piece.sew_line[(first + i) % n]).collect();
     Some(deviation_from_chord(&line))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::refine::subdivide::{refine, RefineMesh, RefineOptions};
+    use crate::template::codec::decode;
+    use crate::template::format::{Dart, Relocation};
+    use crate::template::library::{builtin, reference_body};
+
+    /// The skirt with a waist dart in each half of the back, from the oblique
+    /// waist points (nodes 3, 5) to the hip line (nodes 11, 13).
+    fn skirt_with_back_darts() -> Template {
+        let mut t = builtin().expect("library").remove(0);
+        for (name, a, b) in [("dart_back_left", 3, 11), ("dart_back_right", 5, 13)] {
+            let e = t.edges.iter().position(|e| (e.start, e.end) == (a, b) || (e.start, e.end) == (b, a));
+            t.darts.push(Dart { name: name.into(), panel: "back".into(), edges: vec![e.expect("edge") as u32] });
+        }
+        t.validate().expect("valid");
+        t
+    }
+
+    #[test]
+    fn declared_darts_are_slit_open_and_sewn_to_equal_legs() {
+        let t = skirt_with_back_darts();
+        let body = reference_body().expect("reference body");
+        let m0 = decode(&t, &body, Relocation::Eq1Frame).expect("decode");
+        let edges: Vec<(u32, u32)> = t.edges.iter().map(|e| (e.start, e.end)).collect();
+        let coarse = RefineMesh::from_coarse(&m0, &edges).expect("coarse");
+        let (fine, _) = refine(coarse, &RefineOptions::default(), |_, _| {}).expect("refine");
+        let with =
+            pattern(&t, &fine.positions, &fine.triangles, 3, "ref", &PatternOptions::default()).expect("pattern");
+        let without = pattern(
+            &builtin().expect("library")[0],
+            &fine.positions,
+            &fine.triangles,
+            3,
+            "ref",
+            &PatternOptions::default(),
+        )
+        .expect("pattern");
+        let back = |g: &GarmentPattern| g.reports.iter().find(|r| r.name == "back").cloned().expect("back");
+        let (b1, b0) = (back(&with), back(&without));
+        eprintln!("back piece without darts {:?}\nwith two darts {:?}", b0.distortion, b1.distortion);
+        for name in ["dart_back_left", "dart_back_right"] {
+            let legs = with.seams.iter().find(|s| s.name == name).expect("dart report");
+            assert!(legs.mismatch_mm < 1e-6, "{legs:?}");
+            let piece = with.pieces.iter().find(|p| p.name == "back").expect("piece");
+            let line = piece.internal_lines.iter().find(|l| l.name == name).expect("dart line");
+            let opening = line.points[0].distance(line.points[line.points.len() - 1]);
+            assert!(opening > 5.0, "{name} opens by {opening:.2} mm");
+        }
+        assert!(!b1.sew_line_self_intersects && !b1.cut_line_self_intersects);
+        assert_eq!(b1.distortion.flipped, 0);
+        assert!(b1.distortion.strain_p95 < b0.distortion.strain_p95, "darts relieve the strain");
+    }
 }

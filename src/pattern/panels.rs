@@ -80,6 +80,14 @@ pub enum PanelError {
         /// The next edge.
         second: u32,
     },
+    /// A dart's chain does not run from the panel's outline into its interior.
+    #[error("dart '{dart}': {reason}")]
+    BadDart {
+        /// Dart name.
+        dart: String,
+        /// What is wrong.
+        reason: String,
+    },
     /// A seam names a panel that does not exist.
     #[error("seam '{seam}' names unknown panel '{panel}'")]
     UnknownPanel {
@@ -149,8 +157,13 @@ pub struct Panel {
     pub name: String,
     /// Index of the panel in the template.
     pub index: usize,
-    /// Fine vertex id of each local vertex.
+    /// Fine vertex id of each local vertex: ascending for the first
+    /// [`Panel::unique`] vertices, then the dart duplicates.
     pub global: Vec<u32>,
+    /// How many local vertices precede the dart duplicates.
+    pub unique: usize,
+    /// The panel's darts, slit open.
+    pub darts: Vec<DartLegs>,
     /// Local positions (copied from the fine mesh).
     pub positions: Vec<DVec3>,
     /// Triangles in local ids, orientation kept.
@@ -161,10 +174,34 @@ pub struct Panel {
 }
 
 impl Panel {
-    /// Local id of a fine vertex, if the panel has it.
+    /// Local id of a fine vertex, if the panel has it (on a dart, the vertex of
+    /// the first leg).
     pub fn local(&self, global: u32) -> Option<u32> {
-        self.global.binary_search(&global).ok().map(|i| i as u32)
+        self.global[..self.unique].binary_search(&global).ok().map(|i| i as u32)
     }
+}
+
+impl Panel {
+    /// The outline with every dart closed: the legs' vertices (all but the two
+    /// openings) left out, so the line runs straight across each dart's opening.
+    /// This is the sew line; the legs are drawn as internal lines.
+    pub fn rim(&self) -> Vec<u32> {
+        let legs: std::collections::HashSet<u32> =
+            self.darts.iter().flat_map(|d| d.a[1..].iter().chain(&d.b[1..]).copied()).collect();
+        self.outline.iter().copied().filter(|v| !legs.contains(v)).collect()
+    }
+}
+
+/// A dart slit open in a panel: its two legs in local ids, each from the
+/// opening on the outline to the shared apex.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DartLegs {
+    /// Dart name.
+    pub name: String,
+    /// First leg (the original vertices).
+    pub a: Vec<u32>,
+    /// Second leg (the duplicates, then the apex).
+    pub b: Vec<u32>,
 }
 
 /// A seam: the fine chain along its coarse edges, and the two panels.
@@ -206,7 +243,31 @@ pub fn cut(
         global.sort_unstable();
         global.dedup();
         let local = |g: u32| global.binary_search(&g).map(|i| i as u32).unwrap_or(u32::MAX);
-        let local_tris: Vec<[u32; 3]> = fine.iter().map(|t| t.map(local)).collect();
+        let mut local_tris: Vec<[u32; 3]> = fine.iter().map(|t| t.map(local)).collect();
+        let unique = global.len();
+        let mut darts = Vec::new();
+        for d in t.darts.iter().filter(|d| d.panel == p.name) {
+            let chain = seam_chain(t, &lineage, &d.name, &d.edges).map_err(|_| PanelError::BadDart {
+                dart: d.name.clone(),
+                reason: "its edges do not meet end to end".into(),
+            })?;
+            let Some(mut chain) =
+                chain.iter().map(|&g| global.binary_search(&g).ok().map(|i| i as u32)).collect::<Option<Vec<u32>>>()
+            else {
+                return Err(PanelError::BadDart {
+                    dart: d.name.clone(),
+                    reason: format!("not inside panel '{}'", p.name),
+                });
+            };
+            // run it from the outline to the apex
+            let rim: std::collections::HashSet<u32> = boundary_loops(&local_tris).into_iter().flatten().collect();
+            if !rim.contains(&chain[0]) && chain.last().is_some_and(|v| rim.contains(v)) {
+                chain.reverse();
+            }
+            let legs = slit(&mut local_tris, &mut global, &chain)
+                .map_err(|reason| PanelError::BadDart { dart: d.name.clone(), reason })?;
+            darts.push(DartLegs { name: d.name.clone(), a: chain, b: legs });
+        }
         let loops = boundary_loops(&local_tris);
         if loops.len() != 1 {
             return Err(PanelError::NotADisc { panel: p.name.clone(), loops: loops.len() });
@@ -217,7 +278,16 @@ pub fn cut(
             outline.rotate_left(start);
         }
         let positions = global.iter().map(|&g| positions[g as usize]).collect();
-        panels.push(Panel { name: p.name.clone(), index, global, positions, triangles: local_tris, outline });
+        panels.push(Panel {
+            name: p.name.clone(),
+            index,
+            global,
+            unique,
+            darts,
+            positions,
+            triangles: local_tris,
+            outline,
+        });
     }
     let mut seams = Vec::with_capacity(t.seams.len());
     for s in &t.seams {
@@ -249,6 +319,68 @@ pub fn cut(
         seams.push(SeamChain { name: s.name.clone(), panel_a: a, panel_b: b, chain });
     }
     Ok((panels, seams, lineage))
+}
+
+/// Slits the triangles along `chain` (local ids, from a boundary vertex to an
+/// interior apex): the faces on the left of the chain — those reached from the
+/// face holding the half-edge `chain[0] → chain[1]` without crossing the chain —
+/// get duplicates of every chain vertex but the apex, appended to `global`.
+/// Returns the second leg (duplicates, then the apex).
+fn slit(triangles: &mut [[u32; 3]], global: &mut Vec<u32>, chain: &[u32]) -> Result<Vec<u32>, String> {
+    if chain.len() < 2 {
+        return Err("needs at least one edge".into());
+    }
+    let k = chain.len() - 1;
+    let cut: std::collections::HashSet<(u32, u32)> =
+        chain.windows(2).map(|w| (w[0].min(w[1]), w[0].max(w[1]))).collect();
+    let on_chain: HashMap<u32, usize> = chain[..k].iter().enumerate().map(|(i, &v)| (v, i)).collect();
+    let touches = |f: &[u32; 3]| f.iter().any(|v| on_chain.contains_key(v));
+    let start = triangles
+        .iter()
+        .position(|f| (0..3).any(|j| f[j] == chain[0] && f[(j + 1) % 3] == chain[1]))
+        .ok_or_else(|| "its first edge is not in the panel".to_string())?;
+    // faces around the chain, and which share a non-chain edge
+    let mut by_edge: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
+    for (fi, f) in triangles.iter().enumerate().filter(|(_, f)| touches(f)) {
+        for j in 0..3 {
+            let (a, b) = (f[j], f[(j + 1) % 3]);
+            by_edge.entry((a.min(b), a.max(b))).or_default().push(fi);
+        }
+    }
+    let mut side = std::collections::HashSet::from([start]);
+    let mut stack = vec![start];
+    while let Some(fi) = stack.pop() {
+        let f = triangles[fi];
+        for j in 0..3 {
+            let (a, b) = (f[j], f[(j + 1) % 3]);
+            let key = (a.min(b), a.max(b));
+            if cut.contains(&key) {
+                continue;
+            }
+            for &g in by_edge.get(&key).map_or(&[][..], |v| v.as_slice()) {
+                if g != fi && side.insert(g) {
+                    stack.push(g);
+                }
+            }
+        }
+    }
+    // the other side must hold faces too, or the chain does not separate anything
+    let all: usize = triangles.iter().filter(|f| touches(f)).count();
+    if side.len() >= all {
+        return Err("the faces around it are not split by it (does it start on the outline?)".into());
+    }
+    let first_dup = global.len() as u32;
+    for &v in &chain[..k] {
+        global.push(global[v as usize]);
+    }
+    for &fi in &side {
+        for v in triangles[fi].iter_mut() {
+            if let Some(&i) = on_chain.get(v) {
+                *v = first_dup + i as u32;
+            }
+        }
+    }
+    Ok((0..k as u32).map(|i| first_dup + i).chain(std::iter::once(chain[k])).collect())
 }
 
 /// The fine chain of a seam's coarse edges, oriented so consecutive edges meet.

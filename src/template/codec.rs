@@ -25,8 +25,8 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use super::format::{
-    Edge, Face, GradingDefaults, GrainLine, Node, Notch, Panel, Relocation, Seam, Template, TemplateError, SCHEMA_ID,
-    SCHEMA_VERSION,
+    Dart, Edge, Face, GradingDefaults, GrainLine, Node, Notch, Panel, Relocation, Seam, Template, TemplateError,
+    SCHEMA_ID, SCHEMA_VERSION,
 };
 use super::profile::{Profile, ProfileError};
 use crate::body::feature::FeatureBody;
@@ -118,6 +118,8 @@ pub struct Draft {
     pub seams: Vec<DraftSeam>,
     /// Notches `(name, node)`.
     pub notches: Vec<(String, u32)>,
+    /// Darts `(name, panel, nodes from the outline to the apex)`.
+    pub darts: Vec<(String, String, Vec<u32>)>,
     /// Default grading options.
     pub defaults: GradingDefaults,
 }
@@ -201,6 +203,17 @@ pub fn encode(draft: &Draft, body: &FeatureBody) -> Result<Template, CodecError>
         }
         seams.push(Seam { name: s.name.clone(), panel_a: s.panel_a.clone(), panel_b: s.panel_b.clone(), edges: es });
     }
+    let mut darts = Vec::new();
+    for (name, panel, nodes) in &draft.darts {
+        let mut es = Vec::new();
+        for w in nodes.windows(2) {
+            let key = (w[0].min(w[1]), w[0].max(w[1]));
+            es.push(*edge_ids.get(&key).ok_or_else(|| {
+                CodecError::Draft(format!("dart `{name}` runs along missing edge {}–{}", w[0], w[1]))
+            })?);
+        }
+        darts.push(Dart { name: name.clone(), panel: panel.clone(), edges: es });
+    }
     let t = Template {
         schema: SCHEMA_ID.to_owned(),
         schema_version: SCHEMA_VERSION,
@@ -215,6 +228,7 @@ pub fn encode(draft: &Draft, body: &FeatureBody) -> Result<Template, CodecError>
         panels,
         seams,
         notches: draft.notches.iter().map(|(n, v)| Notch { name: n.clone(), node: *v }).collect(),
+        darts,
         defaults: draft.defaults.clone(),
     };
     t.validate()?;

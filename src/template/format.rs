@@ -123,6 +123,22 @@ pub struct Notch {
     pub node: u32,
 }
 
+/// A dart: a wedge sewn closed inside a panel (seed 002 §6). The template
+/// gives its centre line as a chain of edges from a node on the panel's
+/// outline (the dart's opening) to an interior node (its apex); the panel
+/// is slit along it before flattening, so the wedge opens by what the
+/// surface's curvature needs.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Dart {
+    /// Dart name (unique).
+    pub name: String,
+    /// Panel it lies in.
+    pub panel: String,
+    /// Edges from the outline to the apex, in order.
+    pub edges: Vec<u32>,
+}
+
 /// Which relocation equation a decode uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -188,6 +204,9 @@ pub struct Template {
     /// Notches.
     #[serde(default)]
     pub notches: Vec<Notch>,
+    /// Darts.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub darts: Vec<Dart>,
     /// Default grading options.
     #[serde(default)]
     pub defaults: GradingDefaults,
@@ -470,6 +489,18 @@ impl Template {
                 reason: "belongs to no panel".into(),
             });
         }
+        for d in &self.darts {
+            let bad = |reason: String| TemplateError::BadReference { element: format!("dart `{}`", d.name), reason };
+            if !names.contains(d.panel.as_str()) {
+                return Err(bad(format!("panel `{}` does not exist", d.panel)));
+            }
+            if d.edges.is_empty() {
+                return Err(bad("has no edges".into()));
+            }
+            if let Some(&e) = d.edges.iter().find(|&&e| e as usize >= self.edges.len()) {
+                return Err(bad(format!("edge {e} does not exist")));
+            }
+        }
         for s in &self.seams {
             for side in [&s.panel_a, &s.panel_b] {
                 if !names.contains(side.as_str()) {
@@ -547,6 +578,7 @@ mod tests {
             }],
             seams: vec![],
             notches: vec![],
+            darts: vec![],
             defaults: GradingDefaults::default(),
         }
     }
