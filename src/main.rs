@@ -45,6 +45,10 @@ enum Command {
         /// Print JSON (the only output format; kept for the peer script's command line).
         #[arg(long)]
         json: bool,
+        /// Plain ARAP from the LSCM start: no boundary springs, no boundary truing
+        /// (to compare like with like with other ARAP implementations).
+        #[arg(long)]
+        plain: bool,
     },
     /// Grade every built-in template on the reference body and write each panel as OBJ
     /// (the inputs of `benches/peer_flatten.py`).
@@ -166,7 +170,7 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
             }
         }
         Command::FitChart { chart, figure } => fit_chart(&chart, &figure)?,
-        Command::Flatten { panel, json: _ } => flatten_panel(&panel)?,
+        Command::Flatten { panel, json: _, plain } => flatten_panel(&panel, plain)?,
         Command::Panels { dir } => write_panels(&dir)?,
         Command::Measure { body, landmarks } => measure_body(&body, &landmarks)?,
     }
@@ -268,14 +272,19 @@ fn measure_body(body: &std::path::Path, landmarks: &std::path::Path) -> Result<(
     Ok(())
 }
 
-fn flatten_panel(path: &std::path::Path) -> Result<(), Box<dyn std::error::Error>> {
+fn flatten_panel(path: &std::path::Path, plain: bool) -> Result<(), Box<dyn std::error::Error>> {
     use grade3d::pattern::flatten::{distortion, flatten, lscm, FlattenOptions};
     let (positions, triangles) = grade3d::io::obj::read_obj(&std::fs::read_to_string(path)?)?;
     let start = std::time::Instant::now();
     lscm(&positions, &triangles)?;
     let lscm_ms = start.elapsed().as_secs_f64() * 1e3;
     let start = std::time::Instant::now();
-    let flat = flatten(&positions, &triangles, &FlattenOptions::default())?;
+    let opts = if plain {
+        FlattenOptions { boundary_weight: 0.0, exact_boundary: false, ..Default::default() }
+    } else {
+        FlattenOptions::default()
+    };
+    let flat = flatten(&positions, &triangles, &opts)?;
     let total_ms = start.elapsed().as_secs_f64() * 1e3;
     let d = distortion(&positions, &triangles, &flat.uv);
     let out = serde_json::json!({
