@@ -58,6 +58,7 @@ fn patterns_on_every_body_meet_the_bars() {
     let mut misses: Vec<String> = Vec::new();
     let mut strain_misses: Vec<String> = Vec::new();
     let mut skirt_trouser_pieces = 0usize;
+    let (mut darts_declared, mut darts_left_out) = (0usize, Vec::<String>::new());
     let mut timing = [0.0f64; 3];
     for (name, mesh, lm) in fixture_bodies() {
         let body = derive_features(mesh, &lm, &DeriveOptions::default()).unwrap();
@@ -72,6 +73,8 @@ fn patterns_on_every_body_meet_the_bars() {
                 g.mesh.positions.iter().zip(&g.mesh.fixed).filter(|(_, f)| !**f).map(|(p, _)| *p).collect();
             let pen = penetration_stats(&obstacle.tree, &free);
             assert_eq!(pen.inside, 0, "{} on {name}: {pen:?}", t.name);
+            darts_declared += t.darts.len();
+            darts_left_out.extend(g.pattern.darts_left_out.iter().map(|(d, o)| format!("{d} on {name} ({o:+.1} mm)")));
             timing[0] += g.timings.decode_ms;
             timing[1] += g.timings.refine_ms;
             timing[2] += g.timings.pattern_ms;
@@ -194,7 +197,16 @@ fn patterns_on_every_body_meet_the_bars() {
     for (piece, near) in &hotspots {
         eprintln!("strain concentrates in {piece} near: {near:?}");
     }
+    for t in ["straight-skirt", "trousers"] {
+        let mine: Vec<&String> = strain_misses.iter().filter(|m| m.starts_with(t)).collect();
+        eprintln!("{t}: {} pieces above p95 3 %: {mine:?}", mine.len());
+    }
     check_with_ezdxf(&dir);
+    eprintln!(
+        "darts: {} declared, {} kept, left out: {darts_left_out:?}",
+        darts_declared,
+        darts_declared - darts_left_out.len()
+    );
     eprintln!(
         "skirt/trouser pieces above the strain bar (p95 ≤ 3 %): {} of {}; above the area bar (|E_s| ≤ 2 %): {:?}",
         strain_misses.len(),

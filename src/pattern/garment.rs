@@ -33,13 +33,23 @@ use super::piece::PatternPiece;
 use crate::template::format::Template;
 
 /// Knobs of the pattern stage.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct PatternOptions {
     /// Piece assembly (seam allowance, corners, mitres).
     pub piece: PieceOptions,
     /// Flattening.
     pub flatten: FlattenOptions,
+    /// A declared dart whose opening on this body is below this, or whose legs
+    /// cross (the surface is saddle-shaped there and wants no dart), is left out
+    /// and the pattern made again without it, mm. Default 3.
+    pub min_dart_intake_mm: f64,
+}
+
+impl Default for PatternOptions {
+    fn default() -> Self {
+        Self { piece: PieceOptions::default(), flatten: FlattenOptions::default(), min_dart_intake_mm: 3.0 }
+    }
 }
 
 /// Why the pattern could not be made.
@@ -110,8 +120,11 @@ pub struct GarmentPattern {
     pub pieces: Vec<PatternPiece>,
     /// Per piece, same order.
     pub reports: Vec<PieceReport>,
-    /// Per seam, template order.
+    /// Per seam, template order (then the darts' legs).
     pub seams: Vec<SeamReport>,
+    /// Declared darts left out on this body (no intake, or inverted), with their
+    /// opening when they were tried, mm (negative: inverted).
+    pub darts_left_out: Vec<(String, f64)>,
 }
 
 /// The pattern of the fine mesh (`positions` in metres, `triangles`) that
@@ -127,6 +140,42 @@ pub fn pattern(
     size: &str,
     opts: &PatternOptions,
 ) -> Result<GarmentPattern, PatternError> {
+    let mut tt = t.clone();
+    let mut left_out = Vec::new();
+    loop {
+        let (mut g, darts) = pattern_once(&tt, positions, triangles, levels, size, opts)?;
+        // the worst dart that does not open (or opens inverted) goes, and the pattern is made again
+        let worst = darts
+            .into_iter()
+            .filter(|(_, opening, crossing)| *crossing || *opening < opts.min_dart_intake_mm)
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        match worst {
+            Some((name, opening, _)) => {
+                tt.darts.retain(|d| d.name != name);
+                left_out.push((name, opening));
+            }
+            None => {
+                g.darts_left_out = left_out;
+                return Ok(g);
+            }
+        }
+    }
+}
+
+/// A dart's name, signed opening (mm, negative when inverted) and whether its
+/// piece's sew line crosses itself.
+type DartCheck = (String, f64, bool);
+
+/// One pass of [`pattern`] with every declared dart; also each dart's signed
+/// opening (mm, negative when inverted) and whether its piece's sew line crosses itself.
+fn pattern_once(
+    t: &Template,
+    positions: &[DVec3],
+    triangles: &[[u32; 3]],
+    levels: usize,
+    size: &str,
+    opts: &PatternOptions,
+) -> Result<(GarmentPattern, Vec<DartCheck>), PatternError> {
     let (panels, seams, lineage) = cut(t, positions, triangles, levels)?;
     let mut pieces = Vec::with_capacity(panels.len());
     let mut placed = Vec::with_capacity(panels.len());
@@ -214,7 +263,33 @@ pub fn pattern(
             });
         }
     }
-    Ok(GarmentPattern { style: t.name.clone(), size: size.to_string(), pieces, reports, seams: seam_reports })
+    let mut darts = Vec::new();
+    for (pi, panel) in panels.iter().enumerate() {
+        let rim = panel.rim();
+        let n = rim.len();
+        let at = |l: u32| placed[pi].uv_mm[l as usize];
+        for d in &panel.darts {
+            let (Some(i), Some(j)) = (rim.iter().position(|&v| v == d.a[0]), rim.iter().position(|&v| v == d.b[0]))
+            else {
+                continue;
+            };
+            // the bridge x → y runs along the sew line: inverted if it points back
+            let (x, y) = if (i + 1) % n == j { (i, j) } else { (j, i) };
+            let (w, z) = (rim[(x + n - 1) % n], rim[(y + 1) % n]);
+            let bridge = at(rim[y]) - at(rim[x]);
+            let sign = if bridge.dot(at(z) - at(w)) < 0.0 { -1.0 } else { 1.0 };
+            darts.push((d.name.clone(), sign * bridge.length(), reports[pi].sew_line_self_intersects));
+        }
+    }
+    let g = GarmentPattern {
+        style: t.name.clone(),
+        size: size.to_string(),
+        pieces,
+        reports,
+        seams: seam_reports,
+        darts_left_out: Vec::new(),
+    };
+    Ok((g, darts))
 }
 
 /// Centroid of the edges strained above the 95th percentile and the nearest template node.
@@ -273,24 +348,23 @@ mod tests {
     use super::*;
     use crate::refine::subdivide::{refine, RefineMesh, RefineOptions};
     use crate::template::codec::decode;
-    use crate::template::format::{Dart, Relocation};
+    use crate::template::format::Relocation;
     use crate::template::library::{builtin, reference_body};
 
-    /// The skirt with a waist dart in each half of the back, from the oblique
-    /// waist points (nodes 3, 5) to the hip line (nodes 11, 13).
-    fn skirt_with_back_darts() -> Template {
+    /// The built-in skirt with only its two back darts, and with none.
+    fn skirts() -> (Template, Template) {
         let mut t = builtin().expect("library").remove(0);
-        for (name, a, b) in [("dart_back_left", 3, 11), ("dart_back_right", 5, 13)] {
-            let e = t.edges.iter().position(|e| (e.start, e.end) == (a, b) || (e.start, e.end) == (b, a));
-            t.darts.push(Dart { name: name.into(), panel: "back".into(), edges: vec![e.expect("edge") as u32] });
-        }
+        t.darts.retain(|d| d.panel == "back");
+        assert_eq!(t.darts.len(), 2, "the skirt declares two back darts");
         t.validate().expect("valid");
-        t
+        let mut none = t.clone();
+        none.darts.clear();
+        (t, none)
     }
 
     #[test]
     fn declared_darts_are_slit_open_and_sewn_to_equal_legs() {
-        let t = skirt_with_back_darts();
+        let (t, plain) = skirts();
         let body = reference_body().expect("reference body");
         let m0 = decode(&t, &body, Relocation::Eq1Frame).expect("decode");
         let edges: Vec<(u32, u32)> = t.edges.iter().map(|e| (e.start, e.end)).collect();
@@ -298,15 +372,9 @@ mod tests {
         let (fine, _) = refine(coarse, &RefineOptions::default(), |_, _| {}).expect("refine");
         let with =
             pattern(&t, &fine.positions, &fine.triangles, 3, "ref", &PatternOptions::default()).expect("pattern");
-        let without = pattern(
-            &builtin().expect("library")[0],
-            &fine.positions,
-            &fine.triangles,
-            3,
-            "ref",
-            &PatternOptions::default(),
-        )
-        .expect("pattern");
+        let without =
+            pattern(&plain, &fine.positions, &fine.triangles, 3, "ref", &PatternOptions::default()).expect("pattern");
+        assert!(with.darts_left_out.is_empty(), "{:?}", with.darts_left_out);
         let back = |g: &GarmentPattern| g.reports.iter().find(|r| r.name == "back").cloned().expect("back");
         let (b1, b0) = (back(&with), back(&without));
         eprintln!("back piece without darts {:?}\nwith two darts {:?}", b0.distortion, b1.distortion);

@@ -400,6 +400,13 @@ pub fn straight_skirt(body: &FeatureBody, o: &SkirtOptions) -> Result<Template, 
     b.seam("side_left", "front", "back", vec![waist.nodes[2], hip.nodes[2], hem.nodes[2]]);
     b.seam("side_right", "back", "front", vec![waist.nodes[6], hip.nodes[6], hem.nodes[6]]);
     b.draft.notches = vec![("hip".into(), hip.nodes[2]), ("hip".into(), hip.nodes[6])];
+    // waist darts from the oblique waist points to the hip line, where the flattening
+    // measured the strain gathering (issue #5); a body that wants none drops them
+    b.draft.darts =
+        [("front_left", "front", 1), ("front_right", "front", 7), ("back_left", "back", 3), ("back_right", "back", 5)]
+            .iter()
+            .map(|&(name, panel, k)| (format!("dart_{name}"), panel.to_string(), vec![waist.nodes[k], hip.nodes[k]]))
+            .collect();
     b.draft.name = "straight-skirt".into();
     b.draft.version = 1;
     b.draft.description = "Straight skirt with a slight hem flare: waistband line, hip line and hem; front and back \
