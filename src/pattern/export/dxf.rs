@@ -75,7 +75,7 @@ use dxf::entities::EntityType;
 use dxf::Drawing;
 use glam::DVec2;
 
-use super::{fmt_num, Bounds, ExportError, NotchMark, ShelfLayout};
+use super::{fmt_num, piece_bounds, Bounds, ExportError, NotchMark, ShelfLayout};
 use crate::pattern::piece::{GradePointKind, GradeRuleTable, PatternPiece};
 
 /// AAMA layer of the boundary (cut line) and the system text.
@@ -396,18 +396,6 @@ fn check_piece(p: &PatternPiece) -> Result<(), ExportError> {
         return Err(bad("grade point"));
     }
     Ok(())
-}
-
-/// Bounds of a piece's geometry.
-fn piece_bounds(p: &PatternPiece) -> Option<Bounds> {
-    Bounds::of(
-        p.cut_line
-            .iter()
-            .chain(&p.sew_line)
-            .chain(&p.grain)
-            .chain(p.internal_lines.iter().flat_map(|l| &l.points))
-            .copied(),
-    )
 }
 
 /// A legal, unique R12 block name for `raw` (module docs); records it.

@@ -38,9 +38,9 @@ pub mod svg;
 
 use glam::DVec2;
 
-use super::piece::PieceNotch;
 #[cfg(doc)]
-use super::piece::{GradeRuleTable, PatternPiece};
+use super::piece::GradeRuleTable;
+use super::piece::{PatternPiece, PieceNotch};
 
 /// Why an export (or the read-back of one) failed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -214,6 +214,18 @@ impl NotchMark {
 
 /// The point of the closed polygon's edges closest to `p` (`None` for an
 /// empty polygon or non-finite points).
+/// Bounds of all of a piece's geometry (cut and sew lines, grain, internal lines).
+pub(crate) fn piece_bounds(p: &PatternPiece) -> Option<Bounds> {
+    Bounds::of(
+        p.cut_line
+            .iter()
+            .chain(&p.sew_line)
+            .chain(&p.grain)
+            .chain(p.internal_lines.iter().flat_map(|l| &l.points))
+            .copied(),
+    )
+}
+
 pub(crate) fn closest_on_polygon(poly: &[DVec2], p: DVec2) -> Option<DVec2> {
     let n = poly.len();
     (0..n)

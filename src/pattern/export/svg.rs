@@ -38,7 +38,7 @@ use std::fmt::Write as _;
 
 use glam::DVec2;
 
-use super::{fmt_num, Bounds, NotchMark, ShelfLayout};
+use super::{fmt_num, piece_bounds, Bounds, NotchMark, ShelfLayout};
 use crate::pattern::piece::PatternPiece;
 
 /// How the SVG is drawn. All lengths are millimetres at true scale.
@@ -216,18 +216,6 @@ pub fn nest_svg(style: &str, nests: &[(String, Vec<PatternPiece>)], opts: &SvgOp
         svg.close_group();
     }
     svg.finish()
-}
-
-/// Bounds of all of a piece's geometry.
-fn piece_bounds(p: &PatternPiece) -> Option<Bounds> {
-    Bounds::of(
-        p.cut_line
-            .iter()
-            .chain(&p.sew_line)
-            .chain(&p.grain)
-            .chain(p.internal_lines.iter().flat_map(|l| &l.points))
-            .copied(),
-    )
 }
 
 /// Union of the boxes after their shifts.
