@@ -192,28 +192,34 @@ pub fn encode(draft: &Draft, body: &FeatureBody) -> Result<Template, CodecError>
             quantity: p.quantity,
         })
         .collect();
-    let mut seams = Vec::new();
-    for s in &draft.seams {
-        let mut es = Vec::new();
-        for w in s.nodes.windows(2) {
-            let key = (w[0].min(w[1]), w[0].max(w[1]));
-            es.push(*edge_ids.get(&key).ok_or_else(|| {
-                CodecError::Draft(format!("seam `{}` runs along missing edge {}–{}", s.name, w[0], w[1]))
-            })?);
-        }
-        seams.push(Seam { name: s.name.clone(), panel_a: s.panel_a.clone(), panel_b: s.panel_b.clone(), edges: es });
-    }
-    let mut darts = Vec::new();
-    for (name, panel, nodes) in &draft.darts {
-        let mut es = Vec::new();
-        for w in nodes.windows(2) {
-            let key = (w[0].min(w[1]), w[0].max(w[1]));
-            es.push(*edge_ids.get(&key).ok_or_else(|| {
-                CodecError::Draft(format!("dart `{name}` runs along missing edge {}–{}", w[0], w[1]))
-            })?);
-        }
-        darts.push(Dart { name: name.clone(), panel: panel.clone(), edges: es });
-    }
+    // the template edges along a node path (seams, darts)
+    let edges_along = |what: &str, nodes: &[u32]| -> Result<Vec<u32>, CodecError> {
+        nodes
+            .windows(2)
+            .map(|w| {
+                edge_ids
+                    .get(&(w[0].min(w[1]), w[0].max(w[1])))
+                    .copied()
+                    .ok_or_else(|| CodecError::Draft(format!("{what} runs along missing edge {}–{}", w[0], w[1])))
+            })
+            .collect()
+    };
+    let seams = draft
+        .seams
+        .iter()
+        .map(|s| {
+            let edges = edges_along(&format!("seam `{}`", s.name), &s.nodes)?;
+            Ok(Seam { name: s.name.clone(), panel_a: s.panel_a.clone(), panel_b: s.panel_b.clone(), edges })
+        })
+        .collect::<Result<Vec<_>, CodecError>>()?;
+    let darts = draft
+        .darts
+        .iter()
+        .map(|(name, panel, nodes)| {
+            let edges = edges_along(&format!("dart `{name}`"), nodes)?;
+            Ok(Dart { name: name.clone(), panel: panel.clone(), edges })
+        })
+        .collect::<Result<Vec<_>, CodecError>>()?;
     let t = Template {
         schema: SCHEMA_ID.to_owned(),
         schema_version: SCHEMA_VERSION,
