@@ -1,7 +1,6 @@
 //! `grade3d` command line: the service and the data tools.
 
 use std::io::Write;
-use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -17,11 +16,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Run the HTTP service.
-    Serve {
-        /// Address to listen on.
-        #[arg(long, env = "GRADE3D_ADDR", default_value = "127.0.0.1:8080")]
-        addr: SocketAddr,
-    },
+    Serve(grade3d::service::ServiceConfig),
     /// Fit one mannequin per size of a size chart (CSV or JSON) and print the residuals.
     FitChart {
         /// The size chart.
@@ -114,21 +109,7 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
     match cli.command {
-        Command::Serve { addr } => {
-            let state = grade3d::service::AppState::with_builtin_templates()?;
-            tracing::info!(templates = state.templates.len(), "template library loaded");
-            let rt = tokio::runtime::Runtime::new()?;
-            rt.block_on(async move {
-                let listener = tokio::net::TcpListener::bind(addr).await?;
-                tracing::info!(%addr, "listening");
-                axum::serve(listener, grade3d::service::app(state))
-                    .with_graceful_shutdown(async {
-                        let _ = tokio::signal::ctrl_c().await;
-                    })
-                    .await?;
-                Ok::<(), Box<dyn std::error::Error>>(())
-            })?;
-        }
+        Command::Serve(cfg) => serve(cfg)?,
         Command::Data { what: DataCommand::Mannequin { makehuman, out } } => {
             let data = grade3d::mannequin::data::from_makehuman(&makehuman)?;
             let bytes = grade3d::mannequin::data::encode(&data);
@@ -329,4 +310,44 @@ fn write_panels(dir: &std::path::Path) -> Result<(), Box<dyn std::error::Error>>
         }
     }
     Ok(())
+}
+
+fn serve(cfg: grade3d::service::ServiceConfig) -> Result<(), Box<dyn std::error::Error>> {
+    let addr = cfg.addr;
+    let state = grade3d::service::AppState::open(cfg)?;
+    state.start_gpu();
+    let rt = tokio::runtime::Runtime::new()?;
+    rt.block_on(async move {
+        state.start_background();
+        let listener = tokio::net::TcpListener::bind(addr).await?;
+        // the e2e tests and the README read this line for the bound address
+        tracing::info!(addr = %listener.local_addr()?, "listening");
+        println!("listening on http://{}", listener.local_addr()?);
+        axum::serve(listener, grade3d::service::app(state)).with_graceful_shutdown(shutdown()).await?;
+        tracing::info!("shut down");
+        Ok::<(), Box<dyn std::error::Error>>(())
+    })?;
+    Ok(())
+}
+
+/// Resolves on Ctrl-C or SIGTERM (graceful shutdown: in-flight requests finish).
+async fn shutdown() {
+    let ctrl_c = async {
+        let _ = tokio::signal::ctrl_c().await;
+    };
+    #[cfg(unix)]
+    let term = async {
+        match tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()) {
+            Ok(mut s) => {
+                s.recv().await;
+            }
+            Err(_) => std::future::pending::<()>().await,
+        }
+    };
+    #[cfg(not(unix))]
+    let term = std::future::pending::<()>();
+    tokio::select! {
+        () = ctrl_c => {},
+        () = term => {},
+    }
 }

@@ -1,50 +1,1014 @@
 //! The HTTP shell (axum). Handlers extract, check limits, run the work on
-//! a bounded blocking pool, map errors and serialise. Only the health
-//! check exists so far; the routes of issue #6 build on [`AppState`].
+//! the bounded pool ([`pool`]) within their tracing span, map errors
+//! ([`errors`]) and serialise; the flows themselves are plain functions
+//! ([`work`]). [`app`] builds the router and is testable with `oneshot`.
+//!
+//! Routes (every one is in `openapi.yaml`; [`ROUTES`] is the list the
+//! contract test compares with it):
+//! - `GET /healthz`, `GET /readyz`, `GET /metrics`
+//! - `GET|POST /v1/templates`, `GET|PUT|DELETE /v1/templates/{name}`
+//! - `POST /v1/grade/size-chart` (JSON or CSV), `POST /v1/grade/scan` (multipart)
+//! - `GET /v1/results/{id}`, `GET /v1/results/{id}/{artefact}`
+//! - `POST /v1/jobs`, `GET /v1/jobs/{id}`, `GET /v1/jobs/{id}/artefacts/{artefact}`
 
-use std::sync::Arc;
+use std::path::PathBuf;
+use std::sync::{Arc, OnceLock};
+use std::time::{Duration, Instant};
 
+use axum::body::Bytes;
+use axum::extract::{FromRequest, MatchedPath, Multipart, Path, Query, Request, State};
+use axum::http::{header, HeaderMap, HeaderValue, StatusCode};
+use axum::middleware::{self, Next};
+use axum::response::{IntoResponse, Response};
 use axum::routing::get;
-use axum::Router;
+use axum::{Json, Router};
+use base64::Engine;
+use serde::{Deserialize, Serialize};
 
+use crate::collide::cache::{ObstacleCache, ObstacleCacheOptions};
+use crate::collide::render::GpuContext;
+use crate::mannequin::size_chart::{parse_csv, parse_json, FigureType, SizeChart, SizeChartOptions};
 use crate::template::format::Template;
 
+pub mod errors;
+pub mod jobs;
+pub mod metrics;
+pub mod pool;
 pub mod problem;
+pub mod results;
 pub mod store;
+pub mod work;
 
-/// Shared state of the service.
-#[derive(Debug, Clone, Default)]
-pub struct AppState {
-    /// The template library (the built-in templates, validated at start).
-    pub templates: Arc<Vec<Template>>,
+use jobs::{ArtefactEntry, JobRecord, JobSpec, JobState, JobStore};
+use metrics::Metrics;
+use pool::{PoolOptions, WorkPool};
+use problem::Problem;
+use results::{content_id, ResultCache, Stored};
+use store::TemplateStore;
+use work::{Artefact, BodyInput, Outcome, WorkContext, WorkOptions};
+
+/// Every route: (method, path template as in `openapi.yaml`).
+pub const ROUTES: &[(&str, &str)] = &[
+    ("GET", "/healthz"),
+    ("GET", "/readyz"),
+    ("GET", "/metrics"),
+    ("GET", "/v1/templates"),
+    ("POST", "/v1/templates"),
+    ("GET", "/v1/templates/{name}"),
+    ("PUT", "/v1/templates/{name}"),
+    ("DELETE", "/v1/templates/{name}"),
+    ("POST", "/v1/grade/size-chart"),
+    ("POST", "/v1/grade/scan"),
+    ("GET", "/v1/results/{id}"),
+    ("GET", "/v1/results/{id}/{artefact}"),
+    ("POST", "/v1/jobs"),
+    ("GET", "/v1/jobs/{id}"),
+    ("GET", "/v1/jobs/{id}/artefacts/{artefact}"),
+];
+
+/// The service's configuration: flags of `grade3d serve`, each also read
+/// from the environment variable named.
+#[derive(Debug, Clone, clap::Args)]
+pub struct ServiceConfig {
+    /// Address to listen on.
+    #[arg(long, env = "GRADE3D_ADDR", default_value = "127.0.0.1:8080")]
+    pub addr: std::net::SocketAddr,
+    /// Folder of the template store and the job database.
+    #[arg(long, env = "GRADE3D_DATA_DIR", default_value = "grade3d-data")]
+    pub data_dir: PathBuf,
+    /// Bearer token that writes (template create/replace/delete) require;
+    /// without one, writes are refused.
+    #[arg(long, env = "GRADE3D_API_KEY", hide_env_values = true)]
+    pub api_key: Option<String>,
+    /// Require the API key for reads too.
+    #[arg(long, env = "GRADE3D_PROTECT_READS", default_value_t = false)]
+    pub protect_reads: bool,
+    /// Largest request body, bytes.
+    #[arg(long, env = "GRADE3D_MAX_BODY_BYTES", default_value_t = 64 << 20)]
+    pub max_body_bytes: usize,
+    /// Most vertices of a body scan.
+    #[arg(long, env = "GRADE3D_MAX_SCAN_VERTICES", default_value_t = 500_000)]
+    pub max_scan_vertices: usize,
+    /// Most sizes per size chart.
+    #[arg(long, env = "GRADE3D_MAX_SIZES", default_value_t = 40)]
+    pub max_sizes: usize,
+    /// Most templates per request.
+    #[arg(long, env = "GRADE3D_MAX_TEMPLATES", default_value_t = 8)]
+    pub max_templates: usize,
+    /// Most bodies per batch job.
+    #[arg(long, env = "GRADE3D_MAX_JOB_BODIES", default_value_t = 64)]
+    pub max_job_bodies: usize,
+    /// Work items running at once (default: the number of CPUs).
+    #[arg(long, env = "GRADE3D_WORKERS")]
+    pub workers: Option<usize>,
+    /// Work items waiting beyond those before 503.
+    #[arg(long, env = "GRADE3D_QUEUE_DEPTH", default_value_t = 16)]
+    pub queue_depth: usize,
+    /// Jobs queued or running before 503.
+    #[arg(long, env = "GRADE3D_MAX_PENDING_JOBS", default_value_t = 64)]
+    pub max_pending_jobs: usize,
+    /// Time limit of a synchronous request, seconds.
+    #[arg(long, env = "GRADE3D_REQUEST_TIMEOUT_S", default_value_t = 120)]
+    pub request_timeout_s: u64,
+    /// How long the results of a scan are kept, seconds.
+    #[arg(long, env = "GRADE3D_SCAN_TTL_S", default_value_t = 600)]
+    pub scan_ttl_s: u64,
+    /// Memory for cached results, bytes.
+    #[arg(long, env = "GRADE3D_RESULT_CACHE_BYTES", default_value_t = 256 << 20)]
+    pub result_cache_bytes: usize,
+    /// Grade without a GPU context (no collision avoidance): for tests.
+    #[arg(long, env = "GRADE3D_NO_GPU", default_value_t = false)]
+    pub no_gpu: bool,
 }
 
-impl AppState {
-    /// State with the built-in template library loaded and checked
-    /// against its schema; the error names the template that failed.
-    pub fn with_builtin_templates() -> Result<Self, String> {
-        let templates = crate::template::library::builtin().map_err(|(name, e)| format!("template `{name}`: {e}"))?;
-        Ok(Self { templates: Arc::new(templates) })
+impl ServiceConfig {
+    /// The defaults of `grade3d serve` with `data_dir`.
+    pub fn with_data_dir(data_dir: PathBuf) -> Self {
+        use clap::Parser;
+        #[derive(clap::Parser)]
+        struct Wrap {
+            #[command(flatten)]
+            c: ServiceConfig,
+        }
+        let mut c = Wrap::parse_from(["grade3d"]).c;
+        c.data_dir = data_dir;
+        c
     }
+}
+
+/// What the service holds.
+#[derive(Debug)]
+pub struct Inner {
+    /// Configuration.
+    pub cfg: ServiceConfig,
+    /// The template library.
+    pub store: TemplateStore,
+    /// Batch jobs.
+    pub jobs: JobStore,
+    /// The GPU, once its start-up attempt has ended (`None` inside: none found or not wanted).
+    pub gpu: OnceLock<Option<Arc<GpuContext>>>,
+    /// Mannequin depth maps and winding trees.
+    pub obstacles: Arc<ObstacleCache>,
+    /// Synchronous results.
+    pub results: ResultCache,
+    /// The bounded pool.
+    pub pool: WorkPool,
+    /// Metrics.
+    pub metrics: Metrics,
+    /// Job progress (stage, done, total) of running jobs, in memory.
+    pub progress: std::sync::Mutex<std::collections::HashMap<String, (String, usize, usize)>>,
+    /// The job worker's queue.
+    job_tx: tokio::sync::mpsc::UnboundedSender<String>,
+    job_rx: std::sync::Mutex<Option<tokio::sync::mpsc::UnboundedReceiver<String>>>,
+}
+
+/// Shared state of the service (cheap to clone).
+#[derive(Debug, Clone)]
+pub struct AppState(pub Arc<Inner>);
+
+impl AppState {
+    /// Opens the stores under `cfg.data_dir` (seeding the built-in
+    /// templates on first start) and queues again every unfinished job.
+    /// The GPU is not touched: call [`AppState::start_gpu`].
+    ///
+    /// # Errors
+    /// A message naming what failed.
+    pub fn open(cfg: ServiceConfig) -> Result<Self, String> {
+        let builtins =
+            crate::template::library::builtin().map_err(|(name, e)| format!("built-in template `{name}`: {e}"))?;
+        let store = TemplateStore::open(&cfg.data_dir.join("templates.redb"), &builtins).map_err(|e| e.to_string())?;
+        let jobs = JobStore::open(&cfg.data_dir.join("jobs.redb")).map_err(|e| e.to_string())?;
+        let pool = WorkPool::new(PoolOptions {
+            workers: cfg.workers.unwrap_or_else(|| PoolOptions::default().workers),
+            queue_depth: cfg.queue_depth,
+            ..PoolOptions::default()
+        });
+        let (job_tx, job_rx) = tokio::sync::mpsc::unbounded_channel();
+        let inner = Inner {
+            results: ResultCache::new(cfg.result_cache_bytes),
+            cfg,
+            store,
+            jobs,
+            gpu: OnceLock::new(),
+            obstacles: Arc::new(ObstacleCache::new(ObstacleCacheOptions::default())),
+            pool,
+            metrics: Metrics::new(),
+            progress: Default::default(),
+            job_tx,
+            job_rx: std::sync::Mutex::new(Some(job_rx)),
+        };
+        let state = Self(Arc::new(inner));
+        for r in state.0.jobs.all().map_err(|e| e.to_string())? {
+            state.0.metrics.jobs.with_label_values(&[r.state.as_str()]).inc();
+            if matches!(r.state, JobState::Queued | JobState::Running) {
+                let _ = state.0.job_tx.send(r.id);
+            }
+        }
+        Ok(state)
+    }
+
+    /// Creates the GPU context on a blocking thread (or records that there
+    /// is none); `/readyz` answers 200 once this has ended.
+    pub fn start_gpu(&self) {
+        let me = self.clone();
+        std::thread::spawn(move || {
+            let gpu = if me.0.cfg.no_gpu {
+                None
+            } else {
+                match GpuContext::new() {
+                    Ok(g) => {
+                        tracing::info!(adapter = %g.adapter().name, backend = ?g.adapter().backend, "wgpu adapter ready");
+                        Some(Arc::new(g))
+                    }
+                    Err(e) => {
+                        tracing::warn!(error = %e, "no wgpu adapter: grading runs without collision avoidance");
+                        None
+                    }
+                }
+            };
+            let _ = me.0.gpu.set(gpu);
+        });
+    }
+
+    /// Starts the job worker and the sweeper of expired scan results (call
+    /// once, inside the tokio runtime).
+    pub fn start_background(&self) {
+        let rx = self.0.job_rx.lock().unwrap_or_else(|p| p.into_inner()).take();
+        if let Some(mut rx) = rx {
+            let me = self.clone();
+            tokio::spawn(async move {
+                while let Some(id) = rx.recv().await {
+                    let me2 = me.clone();
+                    let span = tracing::info_span!("job", %id);
+                    let _ = tokio::task::spawn_blocking(move || span.in_scope(|| run_job(&me2, &id))).await;
+                }
+            });
+        }
+        let me = self.clone();
+        tokio::spawn(async move {
+            let mut tick = tokio::time::interval(Duration::from_secs(5));
+            loop {
+                tick.tick().await;
+                let n = me.0.results.purge_expired();
+                if n > 0 {
+                    tracing::info!(purged = n, "expired scan results forgotten");
+                }
+            }
+        });
+    }
+
+    fn work_context(&self) -> Result<WorkContext, Problem> {
+        let gpu = self.0.gpu.get().ok_or_else(not_ready)?.clone();
+        Ok(WorkContext {
+            gpu,
+            obstacles: Arc::clone(&self.0.obstacles),
+            opts: WorkOptions { max_scan_vertices: self.0.cfg.max_scan_vertices, ..WorkOptions::default() },
+        })
+    }
+
+    fn chart_options(&self) -> SizeChartOptions {
+        SizeChartOptions { max_sizes: self.0.cfg.max_sizes, ..SizeChartOptions::default() }
+    }
+}
+
+fn not_ready() -> Problem {
+    let mut p = Problem::new(StatusCode::SERVICE_UNAVAILABLE, "not-ready", "Not ready", "the GPU context is starting");
+    p.retry_after_s = Some(1);
+    p
 }
 
 /// The service's router.
 pub fn app(state: AppState) -> Router {
-    Router::new().route("/healthz", get(|| async { "ok" })).with_state(state)
+    Router::new()
+        .route("/healthz", get(|| async { "ok" }))
+        .route("/readyz", get(readyz))
+        .route("/metrics", get(metrics_text))
+        .route("/v1/templates", get(list_templates).post(create_template))
+        .route("/v1/templates/{name}", get(get_template).put(replace_template).delete(delete_template))
+        .route("/v1/grade/size-chart", axum::routing::post(grade_size_chart))
+        .route("/v1/grade/scan", axum::routing::post(grade_scan))
+        .route("/v1/results/{id}", get(get_result))
+        .route("/v1/results/{id}/{artefact}", get(get_result_artefact))
+        .route("/v1/jobs", axum::routing::post(submit_job))
+        .route("/v1/jobs/{id}", get(get_job))
+        .route("/v1/jobs/{id}/artefacts/{artefact}", get(get_job_artefact))
+        .fallback(|| async { Problem::not_found("no such route") })
+        .method_not_allowed_fallback(|| async {
+            Problem::new(StatusCode::METHOD_NOT_ALLOWED, "method-not-allowed", "Method not allowed", "see openapi.yaml")
+        })
+        .layer(axum::extract::DefaultBodyLimit::disable())
+        .layer(middleware::from_fn_with_state(state.clone(), observe))
+        .layer(tower_http::catch_panic::CatchPanicLayer::custom(|_| {
+            tracing::error!("handler panicked");
+            Problem::internal().into_response()
+        }))
+        .layer(tower_http::trace::TraceLayer::new_for_http())
+        .with_state(state)
+}
+
+/// Records every request in the metrics, by route template (never by the
+/// raw path, which could carry ids).
+async fn observe(State(s): State<AppState>, req: Request, next: Next) -> Response {
+    let route = req.extensions().get::<MatchedPath>().map_or("unmatched", |m| m.as_str()).to_owned();
+    let method = req.method().clone();
+    let start = Instant::now();
+    let resp = next.run(req).await;
+    let m = &s.0.metrics;
+    m.requests.with_label_values(&[route.as_str(), method.as_str(), resp.status().as_str()]).inc();
+    m.latency.with_label_values(&[route.as_str()]).observe(start.elapsed().as_secs_f64());
+    resp
+}
+
+async fn readyz(State(s): State<AppState>) -> Result<Json<serde_json::Value>, Problem> {
+    let gpu = s.0.gpu.get().ok_or_else(not_ready)?;
+    let templates = s.0.store.list()?.len();
+    Ok(Json(serde_json::json!({
+        "ready": true,
+        "templates": templates,
+        "gpu": gpu.as_ref().map(|g| format!("{} ({:?})", g.adapter().name, g.adapter().backend)),
+    })))
+}
+
+async fn metrics_text(State(s): State<AppState>) -> Response {
+    let m = &s.0.metrics;
+    m.queue_depth.set(s.0.pool.depth() as i64);
+    let (hits, misses) = (s.0.obstacles.hits(), s.0.obstacles.misses());
+    let c = m.cache.with_label_values(&["obstacles", "hit"]);
+    c.inc_by(hits.saturating_sub(c.get()));
+    let c = m.cache.with_label_values(&["obstacles", "miss"]);
+    c.inc_by(misses.saturating_sub(c.get()));
+    ([(header::CONTENT_TYPE, "text/plain; version=0.0.4; charset=utf-8")], m.render()).into_response()
+}
+
+// --- limits, authentication, parsing -------------------------------------------------------
+
+async fn body_bytes(s: &AppState, body: axum::body::Body) -> Result<Bytes, Problem> {
+    axum::body::to_bytes(body, s.0.cfg.max_body_bytes).await.map_err(|_| too_large(s.0.cfg.max_body_bytes))
+}
+
+fn too_large(max: usize) -> Problem {
+    Problem::new(
+        StatusCode::PAYLOAD_TOO_LARGE,
+        "body-too-large",
+        "Request body too large",
+        format!("the request body exceeds {max} bytes"),
+    )
+}
+
+fn check_key(s: &AppState, headers: &HeaderMap, write: bool) -> Result<(), Problem> {
+    if !write && !s.0.cfg.protect_reads {
+        return Ok(());
+    }
+    let Some(key) = &s.0.cfg.api_key else {
+        return Err(Problem::new(
+            StatusCode::FORBIDDEN,
+            "writes-disabled",
+            "Writes disabled",
+            "this server has no API key configured (GRADE3D_API_KEY), so it accepts no writes",
+        ));
+    };
+    let given = headers
+        .get(header::AUTHORIZATION)
+        .and_then(|v| v.to_str().ok())
+        .and_then(|v| v.strip_prefix("Bearer "))
+        .ok_or_else(|| Problem::unauthorized("an `Authorization: Bearer <API key>` header is required"))?;
+    // constant-time comparison
+    let (a, b) = (given.as_bytes(), key.as_bytes());
+    let same = a.len() == b.len() && a.iter().zip(b).fold(0u8, |acc, (x, y)| acc | (x ^ y)) == 0;
+    if same {
+        Ok(())
+    } else {
+        Err(Problem::unauthorized("the API key is not valid"))
+    }
+}
+
+fn parse_json_body<T: serde::de::DeserializeOwned>(bytes: &[u8]) -> Result<T, Problem> {
+    let de = &mut serde_json::Deserializer::from_slice(bytes);
+    serde_path_to_error::deserialize(de).map_err(|e| {
+        let path = e.path().to_string();
+        let field = if path == "." { "body".to_owned() } else { format!("body.{path}") };
+        Problem::bad_request("invalid-json", e.inner().to_string()).field(field)
+    })
+}
+
+fn valid_name(name: &str) -> Result<(), Problem> {
+    let ok = !name.is_empty()
+        && name.len() <= 64
+        && name.bytes().all(|b| b.is_ascii_alphanumeric() || b == b'-' || b == b'_' || b == b'.');
+    if ok {
+        Ok(())
+    } else {
+        Err(Problem::bad_request("invalid-name", "names are 1–64 characters of A–Z a–z 0–9 - _ .").field("name"))
+    }
+}
+
+/// The live templates named, in order (at most `max_templates`).
+fn resolve_templates(s: &AppState, names: &[String], field: &str) -> Result<Vec<(u32, String, Template)>, Problem> {
+    if names.is_empty() {
+        return Err(Problem::bad_request("no-templates", "name at least one template").field(field));
+    }
+    if names.len() > s.0.cfg.max_templates {
+        return Err(Problem::bad_request(
+            "too-many-templates",
+            format!("{} templates named; at most {} per request", names.len(), s.0.cfg.max_templates),
+        )
+        .field(field));
+    }
+    let mut out = Vec::with_capacity(names.len());
+    for (i, n) in names.iter().enumerate() {
+        if names[..i].contains(n) {
+            return Err(Problem::bad_request("duplicate-template", format!("template `{n}` named twice")).field(field));
+        }
+        let (v, json) = s.0.store.get_json(n, None).map_err(|e| match e {
+            store::StoreError::NotFound { .. } => Problem::unprocessable("unknown-template", e.to_string()).field(field),
+            other => Problem::from(other),
+        })?;
+        let t = Template::from_json(&json).map_err(|e| errors::template_problem(&e))?;
+        out.push((v, json, t));
+    }
+    Ok(out)
+}
+
+// --- templates -----------------------------------------------------------------------------
+
+async fn list_templates(State(s): State<AppState>, headers: HeaderMap) -> Result<Json<Vec<store::Entry>>, Problem> {
+    check_key(&s, &headers, false)?;
+    Ok(Json(s.0.store.list()?))
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct VersionQuery {
+    version: Option<u32>,
+}
+
+async fn get_template(
+    State(s): State<AppState>,
+    headers: HeaderMap,
+    Path(name): Path<String>,
+    q: Result<Query<VersionQuery>, axum::extract::rejection::QueryRejection>,
+) -> Result<Response, Problem> {
+    check_key(&s, &headers, false)?;
+    let Query(q) = q.map_err(|e| Problem::bad_request("invalid-query", e.body_text()).field("version"))?;
+    let (version, json) = s.0.store.get_json(&name, q.version)?;
+    let mut resp = ([(header::CONTENT_TYPE, "application/json")], json).into_response();
+    if let Ok(v) = HeaderValue::from_str(&version.to_string()) {
+        resp.headers_mut().insert("x-template-version", v);
+    }
+    Ok(resp)
+}
+
+async fn create_template(
+    State(s): State<AppState>,
+    headers: HeaderMap,
+    body: axum::body::Body,
+) -> Result<Response, Problem> {
+    check_key(&s, &headers, true)?;
+    let bytes = body_bytes(&s, body).await?;
+    let text = std::str::from_utf8(&bytes).map_err(|_| Problem::bad_request("not-utf8", "the body is not UTF-8"))?;
+    let me = s.clone();
+    let text = text.to_owned();
+    let limit = Duration::from_secs(s.0.cfg.request_timeout_s);
+    let entry = s.0.pool.run(limit, move || me.0.store.put(None, &text, true)).await??;
+    let location = format!("/v1/templates/{}", entry.name);
+    Ok((StatusCode::CREATED, [(header::LOCATION, location)], Json(entry)).into_response())
+}
+
+async fn replace_template(
+    State(s): State<AppState>,
+    headers: HeaderMap,
+    Path(name): Path<String>,
+    body: axum::body::Body,
+) -> Result<Json<store::Entry>, Problem> {
+    check_key(&s, &headers, true)?;
+    valid_name(&name)?;
+    let bytes = body_bytes(&s, body).await?;
+    let text =
+        std::str::from_utf8(&bytes).map_err(|_| Problem::bad_request("not-utf8", "the body is not UTF-8"))?.to_owned();
+    let me = s.clone();
+    let limit = Duration::from_secs(s.0.cfg.request_timeout_s);
+    Ok(Json(s.0.pool.run(limit, move || me.0.store.put(Some(&name), &text, false)).await??))
+}
+
+async fn delete_template(
+    State(s): State<AppState>,
+    headers: HeaderMap,
+    Path(name): Path<String>,
+) -> Result<StatusCode, Problem> {
+    check_key(&s, &headers, true)?;
+    s.0.store.delete(&name)?;
+    Ok(StatusCode::NO_CONTENT)
+}
+
+// --- the grading flows ---------------------------------------------------------------------
+
+/// The JSON answered by the grading flows and `GET /v1/results/{id}`.
+#[derive(Debug, Serialize)]
+struct ArtefactLink {
+    name: String,
+    media_type: String,
+    bytes: usize,
+    href: String,
+}
+
+fn links(base: &str, artefacts: impl Iterator<Item = (String, String, usize)>) -> Vec<ArtefactLink> {
+    artefacts
+        .map(|(name, media_type, bytes)| ArtefactLink { href: format!("{base}/{name}"), name, media_type, bytes })
+        .collect()
+}
+
+fn summary(id: &str, flow: &str, outcome: &Outcome, expires_s: Option<u64>) -> serde_json::Value {
+    let base = format!("/v1/results/{id}");
+    serde_json::json!({
+        "id": id,
+        "flow": flow,
+        "href": base,
+        "expires_in_s": expires_s,
+        "report": outcome.report,
+        "timings_ms": outcome.timings,
+        "artefacts": links(&base, outcome.artefacts.iter().map(|a| (a.name.clone(), a.media_type.to_owned(), a.bytes.len()))),
+    })
+}
+
+fn answer(stored: &Stored, cached: bool) -> Response {
+    let mut v = stored.summary.clone();
+    if let Some(o) = v.as_object_mut() {
+        o.insert("cached".into(), cached.into());
+    }
+    Json(v).into_response()
+}
+
+/// Runs a flow on the pool, stores its outcome under `id` and answers it.
+async fn run_flow(
+    s: &AppState,
+    id: String,
+    flow: &'static str,
+    ttl: Option<Duration>,
+    f: impl FnOnce(&WorkContext) -> Result<Outcome, work::WorkError> + Send + 'static,
+) -> Result<Response, Problem> {
+    if let Some(hit) = s.0.results.get(&id) {
+        s.0.metrics.cache.with_label_values(&["results", "hit"]).inc();
+        return Ok(answer(&hit, true));
+    }
+    s.0.metrics.cache.with_label_values(&["results", "miss"]).inc();
+    let ctx = s.work_context()?;
+    let limit = Duration::from_secs(s.0.cfg.request_timeout_s);
+    s.0.metrics.queue_depth.set(s.0.pool.depth() as i64 + 1);
+    let outcome = s.0.pool.run(limit, move || f(&ctx)).await??;
+    s.0.metrics.queue_depth.set(s.0.pool.depth() as i64);
+    s.0.metrics.observe_stages(&outcome.timings);
+    let expires = ttl.map(|t| Instant::now() + t);
+    let summary = summary(&id, flow, &outcome, ttl.map(|t| t.as_secs()));
+    let stored = s.0.results.put(id, Stored { summary, artefacts: outcome.artefacts, expires });
+    Ok(answer(&stored, false))
+}
+
+/// Body of `POST /v1/grade/size-chart` as JSON.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SizeChartRequest {
+    templates: Vec<String>,
+    chart: serde_json::Value,
+    #[serde(default)]
+    base_size: Option<String>,
+    #[serde(default)]
+    figure: Option<FigureType>,
+}
+
+/// Query of `POST /v1/grade/size-chart` with a CSV body.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SizeChartQuery {
+    templates: Option<String>,
+    base_size: Option<String>,
+    figure: Option<FigureType>,
+}
+
+fn parse_chart(s: &AppState, chart: &serde_json::Value, figure: Option<FigureType>) -> Result<SizeChart, Problem> {
+    let mut opts = s.chart_options();
+    if let Some(f) = figure {
+        opts.figure = f;
+    }
+    match chart {
+        serde_json::Value::String(csv) => parse_csv(csv, &opts),
+        serde_json::Value::Object(_) => parse_json(&chart.to_string(), &opts),
+        _ => {
+            return Err(
+                Problem::bad_request("chart-type", "the chart is a JSON size chart object or CSV text").field("chart")
+            )
+        }
+    }
+    .map_err(|e| errors::chart_problem(&e))
+}
+
+fn media_is(headers: &HeaderMap, what: &str) -> bool {
+    headers
+        .get(header::CONTENT_TYPE)
+        .and_then(|v| v.to_str().ok())
+        .is_some_and(|v| v.split(';').next().is_some_and(|m| m.trim().eq_ignore_ascii_case(what)))
+}
+
+async fn grade_size_chart(
+    State(s): State<AppState>,
+    headers: HeaderMap,
+    query: Result<Query<SizeChartQuery>, axum::extract::rejection::QueryRejection>,
+    body: axum::body::Body,
+) -> Result<Response, Problem> {
+    check_key(&s, &headers, false)?;
+    let Query(query) = query.map_err(|e| Problem::bad_request("invalid-query", e.body_text()).field("query"))?;
+    let bytes = body_bytes(&s, body).await?;
+    let req = if media_is(&headers, "text/csv") {
+        let text = std::str::from_utf8(&bytes)
+            .map_err(|_| Problem::bad_request("not-utf8", "the CSV is not UTF-8").field("chart"))?;
+        let templates = query
+            .templates
+            .map(|t| t.split(',').map(|x| x.trim().to_owned()).filter(|x| !x.is_empty()).collect())
+            .unwrap_or_default();
+        SizeChartRequest {
+            templates,
+            chart: serde_json::Value::String(text.to_owned()),
+            base_size: query.base_size,
+            figure: query.figure,
+        }
+    } else if media_is(&headers, "application/json") {
+        parse_json_body(&bytes)?
+    } else {
+        return Err(unsupported_media("application/json or text/csv"));
+    };
+    let field = "templates";
+    let templates = resolve_templates(&s, &req.templates, field)?;
+    let chart = parse_chart(&s, &req.chart, req.figure)?;
+    let canonical = serde_json::to_vec(&chart).unwrap_or_default();
+    let mut parts: Vec<&[u8]> = vec![b"size-chart", &canonical, req.base_size.as_deref().unwrap_or("").as_bytes()];
+    parts.extend(templates.iter().map(|(_, json, _)| json.as_bytes()));
+    let id = content_id(&parts);
+    let base = req.base_size.clone();
+    let ts: Vec<Template> = templates.into_iter().map(|(_, _, t)| t).collect();
+    run_flow(&s, id, "size-chart", None, move |ctx| work::size_chart(ctx, &ts, &chart, base.as_deref(), &|_, _, _| {}))
+        .await
+}
+
+fn unsupported_media(what: &str) -> Problem {
+    Problem::new(
+        StatusCode::UNSUPPORTED_MEDIA_TYPE,
+        "unsupported-media-type",
+        "Unsupported media type",
+        format!("send {what}"),
+    )
+    .field("Content-Type")
+}
+
+async fn grade_scan(State(s): State<AppState>, headers: HeaderMap, req: Request) -> Result<Response, Problem> {
+    check_key(&s, &headers, false)?;
+    if !media_is(&headers, "multipart/form-data") {
+        return Err(unsupported_media("multipart/form-data with parts scan, landmarks and template"));
+    }
+    let max = s.0.cfg.max_body_bytes;
+    let (parts, body) = req.into_parts();
+    let bytes = body_bytes(&s, body).await?;
+    let req = Request::from_parts(parts, axum::body::Body::from(bytes));
+    let mut mp = Multipart::from_request(req, &s)
+        .await
+        .map_err(|e| Problem::bad_request("invalid-multipart", e.body_text()).field("body"))?;
+    let (mut scan, mut landmarks, mut templates) = (None, None, Vec::new());
+    loop {
+        let field = match mp.next_field().await {
+            Ok(Some(f)) => f,
+            Ok(None) => break,
+            Err(e) => {
+                let p = if e.status() == StatusCode::PAYLOAD_TOO_LARGE {
+                    too_large(max)
+                } else {
+                    Problem::bad_request("invalid-multipart", e.body_text()).field("body")
+                };
+                return Err(p);
+            }
+        };
+        let name = field.name().unwrap_or("").to_owned();
+        let data = field.bytes().await.map_err(|e| {
+            if e.status() == StatusCode::PAYLOAD_TOO_LARGE {
+                too_large(max)
+            } else {
+                Problem::bad_request("invalid-multipart", e.body_text()).field(name.clone())
+            }
+        })?;
+        match name.as_str() {
+            "scan" => scan = Some(data),
+            "landmarks" => landmarks = Some(data),
+            "template" => {
+                let t = std::str::from_utf8(&data)
+                    .map_err(|_| Problem::bad_request("not-utf8", "template names are UTF-8").field("template"))?;
+                templates.extend(t.split(',').map(|x| x.trim().to_owned()).filter(|x| !x.is_empty()));
+            }
+            other => {
+                return Err(Problem::bad_request("unknown-part", format!("unknown part `{other}`")).field(other));
+            }
+        }
+    }
+    let scan = scan.ok_or_else(|| Problem::bad_request("missing-part", "the `scan` part (GLB) is missing").field("scan"))?;
+    let landmarks = landmarks
+        .ok_or_else(|| Problem::bad_request("missing-part", "the `landmarks` part is missing").field("landmarks"))?;
+    let landmarks = String::from_utf8(landmarks.to_vec())
+        .map_err(|_| Problem::bad_request("not-utf8", "the landmarks are not UTF-8 JSON").field("landmarks"))?;
+    let templates = resolve_templates(&s, &templates, "template")?;
+    let mut parts: Vec<&[u8]> = vec![b"scan", &scan, landmarks.as_bytes()];
+    parts.extend(templates.iter().map(|(_, json, _)| json.as_bytes()));
+    let id = content_id(&parts);
+    let ts: Vec<Template> = templates.into_iter().map(|(_, _, t)| t).collect();
+    let ttl = Duration::from_secs(s.0.cfg.scan_ttl_s);
+    run_flow(&s, id, "scan", Some(ttl), move |ctx| {
+        work::scan(ctx, &ts, &BodyInput { name: "scan", glb: &scan, landmarks: &landmarks })
+    })
+    .await
+}
+
+async fn get_result(State(s): State<AppState>, headers: HeaderMap, Path(id): Path<String>) -> Result<Response, Problem> {
+    check_key(&s, &headers, false)?;
+    let stored = s.0.results.get(&id).ok_or_else(|| Problem::not_found(format!("no result `{id}` (results expire)")))?;
+    Ok(answer(&stored, true))
+}
+
+fn artefact_response(name: &str, media_type: &str, bytes: Vec<u8>) -> Response {
+    let disposition = format!("attachment; filename=\"{name}\"");
+    let mut resp = bytes.into_response();
+    let h = resp.headers_mut();
+    if let Ok(v) = HeaderValue::from_str(media_type) {
+        h.insert(header::CONTENT_TYPE, v);
+    }
+    if let Ok(v) = HeaderValue::from_str(&disposition) {
+        h.insert(header::CONTENT_DISPOSITION, v);
+    }
+    resp
+}
+
+async fn get_result_artefact(
+    State(s): State<AppState>,
+    headers: HeaderMap,
+    Path((id, name)): Path<(String, String)>,
+) -> Result<Response, Problem> {
+    check_key(&s, &headers, false)?;
+    let stored = s.0.results.get(&id).ok_or_else(|| Problem::not_found(format!("no result `{id}` (results expire)")))?;
+    let a: &Artefact = stored
+        .artefacts
+        .iter()
+        .find(|a| a.name == name)
+        .ok_or_else(|| Problem::not_found(format!("result `{id}` has no artefact `{name}`")).field("artefact"))?;
+    Ok(artefact_response(&a.name, a.media_type, a.bytes.clone()))
+}
+
+// --- batch jobs ----------------------------------------------------------------------------
+
+fn job_view(s: &AppState, r: &JobRecord) -> serde_json::Value {
+    let base = format!("/v1/jobs/{}", r.id);
+    let progress = s.0.progress.lock().unwrap_or_else(|p| p.into_inner()).get(&r.id).cloned();
+    let (stage, done, total) = match (r.state, progress) {
+        (JobState::Done, _) => ("done".to_owned(), 1, 1),
+        (JobState::Failed, _) => ("failed".to_owned(), 0, 1),
+        (_, Some(p)) => p,
+        (_, None) => ("queued".to_owned(), 0, r.spec.bodies.len().max(1)),
+    };
+    serde_json::json!({
+        "id": r.id,
+        "href": base,
+        "state": r.state,
+        "progress": {"stage": stage, "done": done, "total": total},
+        "templates": r.versions.iter().map(|(n, v)| serde_json::json!({"name": n, "version": v})).collect::<Vec<_>>(),
+        "error": r.error,
+        "report": r.report,
+        "timings_ms": r.timings_ms,
+        "artefacts": links(&format!("{base}/artefacts"), r.artefacts.iter().map(|a| (a.name.clone(), a.media_type.clone(), a.bytes))),
+    })
+}
+
+async fn submit_job(State(s): State<AppState>, headers: HeaderMap, body: axum::body::Body) -> Result<Response, Problem> {
+    check_key(&s, &headers, false)?;
+    if !media_is(&headers, "application/json") {
+        return Err(unsupported_media("application/json"));
+    }
+    let bytes = body_bytes(&s, body).await?;
+    let spec: JobSpec = parse_json_body(&bytes)?;
+    let templates = resolve_templates(&s, &spec.templates, "templates")?;
+    match (&spec.size_chart, spec.bodies.is_empty()) {
+        (Some(chart), true) => {
+            let chart = parse_chart(&s, chart, None)?;
+            if let Some(b) = &spec.base_size {
+                if !chart.rows.iter().any(|r| &r.size == b) {
+                    return Err(Problem::bad_request("unknown-base-size", format!("`{b}` is not a size of the chart"))
+                        .field("base_size"));
+                }
+            }
+        }
+        (None, false) => {
+            if spec.bodies.len() > s.0.cfg.max_job_bodies {
+                return Err(Problem::bad_request(
+                    "too-many-bodies",
+                    format!("{} bodies; at most {} per job", spec.bodies.len(), s.0.cfg.max_job_bodies),
+                )
+                .field("bodies"));
+            }
+            for (i, b) in spec.bodies.iter().enumerate() {
+                valid_name(&b.name).map_err(|p| p.field(format!("bodies[{i}].name")))?;
+                if spec.bodies[..i].iter().any(|o| o.name == b.name) {
+                    return Err(Problem::bad_request("duplicate-body", format!("body `{}` twice", b.name))
+                        .field(format!("bodies[{i}].name")));
+                }
+                base64::engine::general_purpose::STANDARD.decode(&b.glb_base64).map_err(|e| {
+                    Problem::bad_request("invalid-base64", e.to_string()).field(format!("bodies[{i}].glb_base64"))
+                })?;
+            }
+        }
+        _ => {
+            return Err(Problem::bad_request("job-input", "give exactly one of `size_chart` and `bodies`")
+                .field("size_chart"))
+        }
+    }
+    let canonical = serde_json::to_vec(&spec).unwrap_or_default();
+    let mut parts: Vec<&[u8]> = vec![b"job", &canonical];
+    parts.extend(templates.iter().map(|(_, json, _)| json.as_bytes()));
+    let id = content_id(&parts);
+    let location = format!("/v1/jobs/{id}");
+    if let Some(existing) = s.0.jobs.get(&id)? {
+        if existing.state != JobState::Failed {
+            return Ok((StatusCode::ACCEPTED, [(header::LOCATION, location)], Json(job_view(&s, &existing))).into_response());
+        }
+    }
+    let pending = s.0.metrics.jobs.with_label_values(&["queued"]).get() + s.0.metrics.jobs.with_label_values(&["running"]).get();
+    if pending >= s.0.cfg.max_pending_jobs as i64 {
+        return Err(Problem::busy(30));
+    }
+    let record = JobRecord {
+        id: id.clone(),
+        spec,
+        versions: templates.iter().map(|(v, _, t)| (t.name.clone(), *v)).collect(),
+        state: JobState::Queued,
+        error: None,
+        artefacts: vec![],
+        report: None,
+        timings_ms: Default::default(),
+    };
+    s.0.jobs.put(&record)?;
+    s.0.metrics.jobs.with_label_values(&["queued"]).inc();
+    let _ = s.0.job_tx.send(id);
+    Ok((StatusCode::ACCEPTED, [(header::LOCATION, location)], Json(job_view(&s, &record))).into_response())
+}
+
+/// Runs one job to its end on the calling (blocking) thread.
+fn run_job(s: &AppState, id: &str) {
+    let Ok(Some(mut r)) = s.0.jobs.get(id) else { return };
+    if !matches!(r.state, JobState::Queued | JobState::Running) {
+        return;
+    }
+    let m = &s.0.metrics;
+    m.jobs.with_label_values(&[r.state.as_str()]).dec();
+    m.jobs.with_label_values(&["running"]).inc();
+    // wait for the GPU start-up to end
+    while s.0.gpu.get().is_none() {
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let result = run_job_work(s, &r);
+    m.jobs.with_label_values(&["running"]).dec();
+    let mut stored = Vec::new();
+    match result {
+        Ok(outcome) => {
+            r.state = JobState::Done;
+            m.observe_stages(&outcome.timings);
+            r.timings_ms = outcome.timings;
+            r.report = Some(outcome.report);
+            for a in outcome.artefacts {
+                r.artefacts.push(ArtefactEntry { name: a.name.clone(), media_type: a.media_type.into(), bytes: a.bytes.len() });
+                stored.push((a.name, a.bytes));
+            }
+        }
+        Err(p) => {
+            r.state = JobState::Failed;
+            r.error = Some(p);
+        }
+    }
+    m.jobs.with_label_values(&[r.state.as_str()]).inc();
+    // scans are not kept past the job
+    for b in &mut r.spec.bodies {
+        b.glb_base64.clear();
+    }
+    if let Err(e) = s.0.jobs.finish(&r, &stored) {
+        tracing::error!(error = %e, "job result could not be stored");
+    }
+    s.0.progress.lock().unwrap_or_else(|p| p.into_inner()).remove(id);
+}
+
+fn run_job_work(s: &AppState, r: &JobRecord) -> Result<Outcome, Problem> {
+    let mut templates = Vec::new();
+    for (name, v) in &r.versions {
+        let t = s.0.store.get(name, Some(*v))?.1;
+        templates.push(t);
+    }
+    let ctx = s.work_context()?;
+    let id = r.id.clone();
+    let progress = move |stage: &str, done: usize, total: usize| {
+        s.0.progress.lock().unwrap_or_else(|p| p.into_inner()).insert(id.clone(), (stage.to_owned(), done, total));
+    };
+    let outcome = if let Some(chart) = &r.spec.size_chart {
+        let chart = parse_chart(s, chart, None)?;
+        work::size_chart(&ctx, &templates, &chart, r.spec.base_size.as_deref(), &progress)?
+    } else {
+        let mut decoded = Vec::new();
+        for b in &r.spec.bodies {
+            let glb = base64::engine::general_purpose::STANDARD
+                .decode(&b.glb_base64)
+                .map_err(|e| Problem::bad_request("invalid-base64", e.to_string()))?;
+            decoded.push((b.name.clone(), glb, b.landmarks.to_string()));
+        }
+        let inputs: Vec<BodyInput<'_>> =
+            decoded.iter().map(|(n, g, l)| BodyInput { name: n, glb: g, landmarks: l }).collect();
+        work::bodies(&ctx, &templates, &inputs, r.spec.base_size.as_deref(), &progress)?
+    };
+    Ok(outcome)
+}
+
+async fn get_job(State(s): State<AppState>, headers: HeaderMap, Path(id): Path<String>) -> Result<Response, Problem> {
+    check_key(&s, &headers, false)?;
+    let r = s.0.jobs.get(&id)?.ok_or_else(|| Problem::not_found(format!("no job `{id}`")))?;
+    Ok(Json(job_view(&s, &r)).into_response())
+}
+
+async fn get_job_artefact(
+    State(s): State<AppState>,
+    headers: HeaderMap,
+    Path((id, name)): Path<(String, String)>,
+) -> Result<Response, Problem> {
+    check_key(&s, &headers, false)?;
+    let r = s.0.jobs.get(&id)?.ok_or_else(|| Problem::not_found(format!("no job `{id}`")))?;
+    let entry = r
+        .artefacts
+        .iter()
+        .find(|a| a.name == name)
+        .ok_or_else(|| Problem::not_found(format!("job `{id}` has no artefact `{name}`")).field("artefact"))?;
+    let bytes = s.0.jobs.artefact(&id, &name)?.ok_or_else(|| Problem::not_found("artefact missing"))?;
+    Ok(artefact_response(&entry.name, &entry.media_type, bytes))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use axum::body::Body;
-    use axum::http::{Request, StatusCode};
+    use axum::http::Request;
     use tower::ServiceExt;
 
+    fn state() -> (AppState, PathBuf) {
+        static N: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+        let dir = std::env::temp_dir().join(format!(
+            "grade3d-svc-{}-{}",
+            std::process::id(),
+            N.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+        ));
+        let _ = std::fs::remove_dir_all(&dir);
+        let mut cfg = ServiceConfig::with_data_dir(dir.clone());
+        cfg.api_key = Some("k".into());
+        (AppState::open(cfg).unwrap(), dir)
+    }
+
     #[tokio::test]
-    async fn healthz_answers_ok() {
-        let state = AppState::with_builtin_templates().unwrap();
-        assert_eq!(state.templates.len(), 3);
-        let resp = app(state).oneshot(Request::get("/healthz").body(Body::empty()).unwrap()).await.unwrap();
+    async fn healthz_answers_ok_and_unknown_routes_are_problems() {
+        let (s, dir) = state();
+        let resp = app(s.clone()).oneshot(Request::get("/healthz").body(Body::empty()).unwrap()).await.unwrap();
         assert_eq!(resp.status(), StatusCode::OK);
+        let resp = app(s.clone()).oneshot(Request::get("/nope").body(Body::empty()).unwrap()).await.unwrap();
+        assert_eq!(resp.status(), StatusCode::NOT_FOUND);
+        assert_eq!(resp.headers()[header::CONTENT_TYPE], problem::PROBLEM_JSON);
+        let resp = app(s.clone()).oneshot(Request::patch("/v1/templates").body(Body::empty()).unwrap()).await.unwrap();
+        assert_eq!(resp.status(), StatusCode::METHOD_NOT_ALLOWED);
+        assert_eq!(resp.headers()[header::CONTENT_TYPE], problem::PROBLEM_JSON);
+        // not ready before the GPU start-up ends
+        let resp = app(s).oneshot(Request::get("/readyz").body(Body::empty()).unwrap()).await.unwrap();
+        assert_eq!(resp.status(), StatusCode::SERVICE_UNAVAILABLE);
+        let _ = std::fs::remove_dir_all(dir);
+    }
+
+    #[tokio::test]
+    async fn writes_need_the_key() {
+        let (s, dir) = state();
+        let resp = app(s.clone())
+            .oneshot(Request::delete("/v1/templates/trousers").body(Body::empty()).unwrap())
+            .await
+            .unwrap();
+        assert_eq!(resp.status(), StatusCode::UNAUTHORIZED);
+        let resp = app(s.clone())
+            .oneshot(
+                Request::delete("/v1/templates/trousers")
+                    .header(header::AUTHORIZATION, "Bearer wrong")
+                    .body(Body::empty())
+                    .unwrap(),
+            )
+            .await
+            .unwrap();
+        assert_eq!(resp.status(), StatusCode::UNAUTHORIZED);
+        let resp = app(s.clone())
+            .oneshot(
+                Request::delete("/v1/templates/trousers").header(header::AUTHORIZATION, "Bearer k").body(Body::empty()).unwrap(),
+            )
+            .await
+            .unwrap();
+        assert_eq!(resp.status(), StatusCode::NO_CONTENT);
+        assert_eq!(s.0.store.list().unwrap().len(), 2);
+        let _ = std::fs::remove_dir_all(dir);
     }
 }

@@ -73,6 +73,23 @@ impl Problem {
         p
     }
 
+    /// 503 when work outlived the request's time limit.
+    pub fn timeout(limit_s: u64, retry_after_s: u64) -> Self {
+        let mut p = Self::new(
+            StatusCode::SERVICE_UNAVAILABLE,
+            "timeout",
+            "Time limit exceeded",
+            format!("the work did not finish within the {limit_s} s time limit; retry later or submit a batch job"),
+        );
+        p.retry_after_s = Some(retry_after_s);
+        p
+    }
+
+    /// 401 for a write without a valid API key.
+    pub fn unauthorized(detail: impl Into<String>) -> Self {
+        Self::new(StatusCode::UNAUTHORIZED, "unauthorized", "Unauthorized", detail).field("Authorization")
+    }
+
     /// 500 that says nothing internal; log the cause where it is created.
     pub fn internal() -> Self {
         Self::new(StatusCode::INTERNAL_SERVER_ERROR, "internal", "Internal error", "the request could not be completed")

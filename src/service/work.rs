@@ -1,0 +1,532 @@
+//! The three grading flows as plain functions: data in, artefacts out (no
+//! HTTP, no async). The service runs them on its bounded pool; batch jobs
+//! run them on the job worker.
+//!
+//! - [`size_chart`]: one mannequin per size row (seed 003 sizing, see
+//!   [`crate::mannequin::fit`]), every template graded on every size, the
+//!   graded nest and grade rules per template (issue #5), per-size meshes and
+//!   patterns, and the fit report.
+//! - [`scan`]: one body scan with its landmarks, one template.
+//! - [`bodies`]: many scans × templates (the batch flow's bodies part).
+//!
+//! Determinism: every artefact is a function of the inputs only — sizes and
+//! templates are processed in request order and the report carries no wall
+//! times (those go to [`Outcome::timings`], outside the artefacts).
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+use std::time::Instant;
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use crate::body::derive::{derive_features, DeriveOptions, FeatureError, Landmarks};
+use crate::body::feature::FeatureBody;
+use crate::body::measure::{measure, MeasureOptions, MeasurementId};
+use crate::collide::cache::{BodyKey, Obstacle, ObstacleCache};
+use crate::collide::render::{GpuContext, RenderError, RenderOptions};
+use crate::geom::mesh::{TriMesh, VertexId};
+use crate::geom::plane::Plane;
+use crate::geom::slice::slice;
+use crate::geom::winding::{WindingOptions, WindingTree};
+use crate::io::gltf::{read_mesh, write_glb, GlbAttribute, GltfError, GltfReadOptions};
+use crate::io::landmarks::{parse_landmarks, LandmarkFileError};
+use crate::mannequin::fit::{fit_size, FitError, FitOptions};
+use crate::mannequin::model::{BodyModel, MannequinError};
+use crate::mannequin::size_chart::SizeChart;
+use crate::pattern::export::{dxf, rul, svg, ExportError};
+use crate::pattern::grade::{grade_rules, nests, GradeError};
+use crate::pattern::piece::PatternPiece;
+use crate::pipeline::{grade, GradeOptions, Graded, PipelineError};
+use crate::template::format::Template;
+
+/// Why a flow failed. Client-caused variants name the offending input.
+#[derive(Debug, thiserror::Error)]
+pub enum WorkError {
+    /// The embedded body model could not be loaded (internal).
+    #[error(transparent)]
+    Model(#[from] MannequinError),
+    /// No mannequin could be fitted to a size row.
+    #[error("size `{size}`: {source}")]
+    Fit {
+        /// The size label.
+        size: String,
+        /// Why.
+        source: FitError,
+    },
+    /// The scan is not a usable glTF body.
+    #[error("scan `{body}`: {source}")]
+    Scan {
+        /// Which body (its name in the request).
+        body: String,
+        /// Why.
+        source: GltfError,
+    },
+    /// The landmarks document is invalid.
+    #[error("landmarks of `{body}`: {source}")]
+    Landmarks {
+        /// Which body.
+        body: String,
+        /// Why.
+        source: LandmarkFileError,
+    },
+    /// The feature model of a scan could not be derived.
+    #[error("body `{body}`: {source}")]
+    Feature {
+        /// Which body.
+        body: String,
+        /// Why.
+        source: FeatureError,
+    },
+    /// The scan has more vertices than the service accepts.
+    #[error("body `{body}` has {vertices} vertices; at most {max} are accepted")]
+    TooManyVertices {
+        /// Which body.
+        body: String,
+        /// Its vertex count.
+        vertices: usize,
+        /// The limit.
+        max: usize,
+    },
+    /// A template could not be graded onto a body.
+    #[error("template `{template}` on `{size}`: {source}")]
+    Grade {
+        /// Template name.
+        template: String,
+        /// Size or body name.
+        size: String,
+        /// Why.
+        source: PipelineError,
+    },
+    /// The depth maps could not be rendered (internal).
+    #[error(transparent)]
+    Render(#[from] RenderError),
+    /// Nests or grade rules failed.
+    #[error("grading `{template}`: {source}")]
+    Nest {
+        /// Template name.
+        template: String,
+        /// Why.
+        source: GradeError,
+    },
+    /// The base size is not one of the chart's sizes.
+    #[error("base size `{0}` is not a size of the chart")]
+    UnknownBaseSize(String),
+    /// An export failed.
+    #[error(transparent)]
+    Export(#[from] ExportError),
+    /// Writing the garment GLB failed.
+    #[error("garment GLB: {0}")]
+    GarmentGlb(GltfError),
+}
+
+/// One downloadable result.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Artefact {
+    /// File name, unique within its outcome (`straight-skirt-8.pattern.svg`).
+    pub name: String,
+    /// Media type.
+    pub media_type: &'static str,
+    /// The bytes.
+    pub bytes: Vec<u8>,
+}
+
+/// What a flow returns.
+#[derive(Debug, Clone, Default)]
+pub struct Outcome {
+    /// The report (also among the artefacts as `report.json`).
+    pub report: serde_json::Value,
+    /// Every artefact, in a deterministic order.
+    pub artefacts: Vec<Artefact>,
+    /// Wall time per stage over the whole flow, ms (not part of any artefact).
+    pub timings: BTreeMap<String, f64>,
+}
+
+/// Knobs of the flows.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct WorkOptions {
+    /// Most vertices of a scan. Default 500 000.
+    pub max_scan_vertices: usize,
+    /// Grading knobs.
+    pub grade: GradeOptions,
+    /// Depth maps.
+    pub render: RenderOptions,
+}
+
+impl Default for WorkOptions {
+    fn default() -> Self {
+        Self { max_scan_vertices: 500_000, grade: GradeOptions::default(), render: RenderOptions::default() }
+    }
+}
+
+/// What the flows share: the GPU (optional: without one, grading runs
+/// without collision avoidance and the report says so) and the per-body
+/// obstacle cache (used for mannequins only: scans are personal data and
+/// nothing derived from them outlives the request).
+#[derive(Debug)]
+pub struct WorkContext {
+    /// The one wgpu device of the process.
+    pub gpu: Option<Arc<GpuContext>>,
+    /// Depth maps and winding trees of mannequins.
+    pub obstacles: Arc<ObstacleCache>,
+    /// Knobs.
+    pub opts: WorkOptions,
+}
+
+/// Stage names, as reported in timings and progress.
+pub mod stage {
+    /// Fitting mannequins to size rows.
+    pub const FIT: &str = "fit";
+    /// Reading a scan and deriving its features.
+    pub const BODY: &str = "body";
+    /// Rendering depth maps and building the winding tree.
+    pub const OBSTACLE: &str = "obstacle";
+    /// Decoding templates onto bodies.
+    pub const DECODE: &str = "decode";
+    /// Subdivision with collision avoidance.
+    pub const REFINE: &str = "refine";
+    /// Panels, flattening, pieces.
+    pub const PATTERN: &str = "pattern";
+    /// Writing SVG, DXF, GLB, JSON.
+    pub const EXPORT: &str = "export";
+}
+
+/// Progress callback: `(stage, done, total)` in grades.
+pub type Progress<'a> = &'a (dyn Fn(&str, usize, usize) + Sync);
+
+struct Timer(BTreeMap<String, f64>);
+
+impl Timer {
+    fn add(&mut self, stage: &str, since: Instant) {
+        *self.0.entry(stage.to_owned()).or_default() += since.elapsed().as_secs_f64() * 1e3;
+    }
+}
+
+impl WorkContext {
+    fn obstacle(&self, mesh: &TriMesh, cache: bool) -> Result<Option<Arc<Obstacle>>, WorkError> {
+        let Some(gpu) = &self.gpu else { return Ok(None) };
+        let build = || -> Result<Obstacle, RenderError> {
+            Ok(Obstacle {
+                maps: gpu.render(mesh, &self.opts.render)?,
+                tree: WindingTree::new(mesh, &WindingOptions::default()),
+            })
+        };
+        Ok(Some(if cache {
+            self.obstacles.get_or_build(BodyKey::of(mesh, &self.opts.render), build)?
+        } else {
+            Arc::new(build()?)
+        }))
+    }
+}
+
+/// A body of a batch or scan request, before validation.
+#[derive(Debug, Clone)]
+pub struct BodyInput<'a> {
+    /// Its name (the size label of its results).
+    pub name: &'a str,
+    /// GLB or glTF with embedded buffers.
+    pub glb: &'a [u8],
+    /// Landmarks JSON.
+    pub landmarks: &'a str,
+}
+
+/// Reads and checks a scan and derives its feature model.
+///
+/// # Errors
+/// [`WorkError::Scan`], [`WorkError::TooManyVertices`], [`WorkError::Landmarks`], [`WorkError::Feature`].
+pub fn read_body(input: &BodyInput<'_>, opts: &WorkOptions) -> Result<FeatureBody, WorkError> {
+    let name = input.name.to_owned();
+    let mesh = read_mesh(input.glb, &GltfReadOptions::default())
+        .map_err(|source| WorkError::Scan { body: name.clone(), source })?;
+    if mesh.vertex_count() > opts.max_scan_vertices {
+        return Err(WorkError::TooManyVertices {
+            body: name,
+            vertices: mesh.vertex_count(),
+            max: opts.max_scan_vertices,
+        });
+    }
+    let lm: Landmarks =
+        parse_landmarks(input.landmarks).map_err(|source| WorkError::Landmarks { body: name.clone(), source })?;
+    derive_features(mesh, &lm, &DeriveOptions::default()).map_err(|source| WorkError::Feature { body: name, source })
+}
+
+/// Grades every template on one body and writes its per-size artefacts.
+fn grade_body(
+    ctx: &WorkContext,
+    templates: &[Template],
+    body: &FeatureBody,
+    size: &str,
+    cache_obstacle: bool,
+    timer: &mut Timer,
+    out: &mut Vec<Artefact>,
+) -> Result<Vec<(String, Graded, serde_json::Value)>, WorkError> {
+    let start = Instant::now();
+    let obstacle = ctx.obstacle(&body.mesh, cache_obstacle)?;
+    timer.add(stage::OBSTACLE, start);
+    let mut graded = Vec::with_capacity(templates.len());
+    for t in templates {
+        let g = grade(t, body, obstacle.as_deref(), size, &ctx.opts.grade).map_err(|source| WorkError::Grade {
+            template: t.name.clone(),
+            size: size.to_owned(),
+            source,
+        })?;
+        *timer.0.entry(stage::DECODE.into()).or_default() += g.timings.decode_ms;
+        *timer.0.entry(stage::REFINE.into()).or_default() += g.timings.refine_ms;
+        *timer.0.entry(stage::PATTERN.into()).or_default() += g.timings.pattern_ms;
+        let start = Instant::now();
+        let stem = format!("{}-{}", t.name, size);
+        let pieces = &g.pattern.pieces;
+        out.push(Artefact {
+            name: format!("{stem}.pattern.svg"),
+            media_type: "image/svg+xml",
+            bytes: svg::pieces_svg(pieces, &Default::default()).into_bytes(),
+        });
+        out.push(Artefact {
+            name: format!("{stem}.pattern.dxf"),
+            media_type: "image/vnd.dxf",
+            bytes: dxf::pieces_dxf(&t.name, pieces, &Default::default())?,
+        });
+        out.push(Artefact {
+            name: format!("{stem}.pattern.json"),
+            media_type: "application/json",
+            bytes: serde_json::to_vec(&g.pattern).unwrap_or_default(),
+        });
+        let (glb, fit) = garment_glb(&g, body, obstacle.as_deref())?;
+        out.push(Artefact { name: format!("{stem}.garment.glb"), media_type: "model/gltf-binary", bytes: glb });
+        timer.add(stage::EXPORT, start);
+        graded.push((t.name.clone(), g, fit));
+    }
+    Ok(graded)
+}
+
+/// The garment as GLB with the ease (distance to the body, mm) and the
+/// panel index as vertex attributes, and the fit figures of the report.
+fn garment_glb(g: &Graded, body: &FeatureBody, obstacle: Option<&Obstacle>) -> Result<(Vec<u8>, serde_json::Value), WorkError> {
+    let tris: Vec<[VertexId; 3]> = g.mesh.triangles.iter().map(|t| t.map(VertexId)).collect();
+    let mesh = TriMesh::new(g.mesh.positions.clone(), tris).map_err(|e| WorkError::GarmentGlb(GltfError::Mesh(e)))?;
+    let ease_mm: Vec<f64> = match obstacle {
+        Some(ob) => g.mesh.positions.iter().map(|&p| -ob.tree.signed_depth(p) * 1e3).collect(),
+        None => vec![0.0; g.mesh.positions.len()],
+    };
+    let normals = mesh.vertex_normals();
+    let ease_f32: Vec<f32> = ease_mm.iter().map(|&e| e as f32).collect();
+    let glb = write_glb(&mesh, Some(&normals), &[GlbAttribute { name: "_EASE_MM", values: &ease_f32 }], "grade3d")
+        .map_err(WorkError::GarmentGlb)?;
+    let mut sorted = ease_mm.clone();
+    sorted.sort_by(f64::total_cmp);
+    let pick = |q: f64| sorted.get(((sorted.len().saturating_sub(1)) as f64 * q).round() as usize).copied();
+    let inside = ease_mm.iter().filter(|&&e| e < 0.0).count();
+    let fit = serde_json::json!({
+        "collision_checked": obstacle.is_some(),
+        "distance_to_body_mm": {
+            "min": pick(0.0), "p05": pick(0.05), "median": pick(0.5), "p95": pick(0.95), "max": pick(1.0),
+        },
+        "vertices_inside_body": inside,
+        "girth_ease_mm": girth_ease(body, &mesh),
+    });
+    Ok((glb, fit))
+}
+
+/// Garment girth − body girth at each body girth the garment spans: the
+/// garment's section by the girth's horizontal plane nearest the girth.
+fn girth_ease(body: &FeatureBody, garment: &TriMesh) -> BTreeMap<String, f64> {
+    let body_m = measure(body, &MeasureOptions::default());
+    let mut out = BTreeMap::new();
+    for &id in MeasurementId::ALL {
+        let (Some(curve), Some(&girth)) = (id.girth_curve(), body_m.get(&id)) else { continue };
+        let Some(c) = body.curves.get(&curve) else { continue };
+        let centre = c.polyline.centroid();
+        let Some(plane) = Plane::from_point_normal(centre, DVec3::Y) else { continue };
+        let best = slice(garment, &plane)
+            .into_iter()
+            .filter(|s| s.polyline.closed)
+            .map(|s| {
+                let d = s.polyline.centroid() - centre;
+                (DVec3::new(d.x, 0.0, d.z).length(), s.polyline.length())
+            })
+            .min_by(|a, b| a.0.total_cmp(&b.0));
+        if let Some((d, len)) = best {
+            if d < 0.1 {
+                out.insert(id.as_str().to_owned(), ((len - girth) * 1e3 * 10.0).round() / 10.0);
+            }
+        }
+    }
+    out
+}
+
+fn garment_report(name: &str, g: &Graded, fit: serde_json::Value) -> serde_json::Value {
+    serde_json::json!({
+        "template": name,
+        "fit": fit,
+        "collision": g.collision,
+        "pieces": g.pattern.reports,
+        "seams": g.pattern.seams,
+        "darts_left_out": g.pattern.darts_left_out,
+    })
+}
+
+/// Nests, grade rules and their exports of one template over sizes.
+fn graded_nest(
+    template: &str,
+    sizes: &[(String, Vec<PatternPiece>)],
+    base: &str,
+    out: &mut Vec<Artefact>,
+) -> Result<(), WorkError> {
+    let nest_err = |source| WorkError::Nest { template: template.to_owned(), source };
+    let nested = nests(sizes).map_err(nest_err)?;
+    let rules = grade_rules(template, sizes, base).map_err(nest_err)?;
+    out.push(Artefact {
+        name: format!("{template}.nest.svg"),
+        media_type: "image/svg+xml",
+        bytes: svg::nest_svg(template, &nested, &Default::default()).into_bytes(),
+    });
+    out.push(Artefact {
+        name: format!("{template}.nest.dxf"),
+        media_type: "image/vnd.dxf",
+        bytes: dxf::nest_dxf_with_rules(template, &nested, &rules, &Default::default())?,
+    });
+    out.push(Artefact {
+        name: format!("{template}.rules.csv"),
+        media_type: "text/csv",
+        bytes: rul::rules_table_csv(&rules).into_bytes(),
+    });
+    out.push(Artefact {
+        name: format!("{template}.rules.rul"),
+        media_type: "text/plain",
+        bytes: rul::rules_rul(&rules).into_bytes(),
+    });
+    Ok(())
+}
+
+fn finish(report: serde_json::Value, mut artefacts: Vec<Artefact>, timer: Timer) -> Outcome {
+    let bytes = serde_json::to_vec_pretty(&report).unwrap_or_default();
+    artefacts.push(Artefact { name: "report.json".into(), media_type: "application/json", bytes });
+    Outcome { report, artefacts, timings: timer.0 }
+}
+
+/// The size-chart flow (module docs). `base` is the grade rules' base size
+/// (default: the middle row).
+///
+/// # Errors
+/// [`WorkError`].
+pub fn size_chart(
+    ctx: &WorkContext,
+    templates: &[Template],
+    chart: &SizeChart,
+    base: Option<&str>,
+    progress: Progress<'_>,
+) -> Result<Outcome, WorkError> {
+    let base = match base {
+        Some(b) if chart.rows.iter().any(|r| r.size == b) => b.to_owned(),
+        Some(b) => return Err(WorkError::UnknownBaseSize(b.to_owned())),
+        None => chart.rows.get(chart.rows.len() / 2).map(|r| r.size.clone()).unwrap_or_default(),
+    };
+    let model = BodyModel::embedded()?;
+    let mut timer = Timer(BTreeMap::new());
+    let mut artefacts = Vec::new();
+    let mut per_template: Vec<Vec<(String, Vec<PatternPiece>)>> = vec![Vec::new(); templates.len()];
+    let mut sizes = Vec::new();
+    let total = chart.rows.len();
+    for (done, row) in chart.rows.iter().enumerate() {
+        progress(stage::FIT, done, total);
+        let start = Instant::now();
+        let fitted = fit_size(model, row, &FitOptions::default())
+            .map_err(|source| WorkError::Fit { size: row.size.clone(), source })?;
+        timer.add(stage::FIT, start);
+        progress(stage::REFINE, done, total);
+        let graded = grade_body(ctx, templates, &fitted.body, &row.size, true, &mut timer, &mut artefacts)?;
+        let residuals: BTreeMap<&str, serde_json::Value> = fitted
+            .residuals
+            .iter()
+            .map(|(id, r)| {
+                (id.as_str(), serde_json::json!({"target_m": r.target_m, "achieved_m": r.achieved_m, "error_mm": r.error_mm()}))
+            })
+            .collect();
+        let mut garments = Vec::new();
+        for (k, (name, g, fit)) in graded.into_iter().enumerate() {
+            garments.push(garment_report(&name, &g, fit));
+            per_template[k].push((row.size.clone(), g.pattern.pieces));
+        }
+        sizes.push(serde_json::json!({"size": row.size, "mannequin": {"residuals": residuals}, "garments": garments}));
+    }
+    progress(stage::EXPORT, total, total);
+    let start = Instant::now();
+    for (t, sizes) in templates.iter().zip(&per_template) {
+        graded_nest(&t.name, sizes, &base, &mut artefacts)?;
+    }
+    timer.add(stage::EXPORT, start);
+    let report = serde_json::json!({
+        "flow": "size-chart",
+        "figure": chart.figure,
+        "base_size": base,
+        "templates": templates.iter().map(|t| serde_json::json!({"name": t.name, "version": t.version})).collect::<Vec<_>>(),
+        "collision_checked": ctx.gpu.is_some(),
+        "sizes": sizes,
+    });
+    Ok(finish(report, artefacts, timer))
+}
+
+/// Grades every template on every body (scans); with more than one body the
+/// nests and grade rules span the bodies, based on `base` (default: the
+/// first body).
+///
+/// # Errors
+/// [`WorkError`].
+pub fn bodies(
+    ctx: &WorkContext,
+    templates: &[Template],
+    inputs: &[BodyInput<'_>],
+    base: Option<&str>,
+    progress: Progress<'_>,
+) -> Result<Outcome, WorkError> {
+    let mut timer = Timer(BTreeMap::new());
+    let mut artefacts = Vec::new();
+    let mut per_template: Vec<Vec<(String, Vec<PatternPiece>)>> = vec![Vec::new(); templates.len()];
+    let mut reports = Vec::new();
+    let total = inputs.len();
+    for (done, input) in inputs.iter().enumerate() {
+        progress(stage::BODY, done, total);
+        let start = Instant::now();
+        let body = read_body(input, &ctx.opts)?;
+        timer.add(stage::BODY, start);
+        progress(stage::REFINE, done, total);
+        let graded = grade_body(ctx, templates, &body, input.name, false, &mut timer, &mut artefacts)?;
+        let mut garments = Vec::new();
+        for (k, (name, g, fit)) in graded.into_iter().enumerate() {
+            garments.push(garment_report(&name, &g, fit));
+            per_template[k].push((input.name.to_owned(), g.pattern.pieces));
+        }
+        let measurements: BTreeMap<&str, f64> =
+            measure(&body, &MeasureOptions::default()).iter().map(|(id, v)| (id.as_str(), *v)).collect();
+        reports.push(serde_json::json!({"body": input.name, "measurements_m": measurements, "garments": garments}));
+    }
+    if inputs.len() > 1 {
+        let base = match base {
+            Some(b) if inputs.iter().any(|i| i.name == b) => b.to_owned(),
+            Some(b) => return Err(WorkError::UnknownBaseSize(b.to_owned())),
+            None => inputs[0].name.to_owned(),
+        };
+        let start = Instant::now();
+        for (t, sizes) in templates.iter().zip(&per_template) {
+            graded_nest(&t.name, sizes, &base, &mut artefacts)?;
+        }
+        timer.add(stage::EXPORT, start);
+    }
+    progress(stage::EXPORT, total, total);
+    let report = serde_json::json!({
+        "flow": if inputs.len() == 1 { "scan" } else { "bodies" },
+        "templates": templates.iter().map(|t| serde_json::json!({"name": t.name, "version": t.version})).collect::<Vec<_>>(),
+        "collision_checked": ctx.gpu.is_some(),
+        "bodies": reports,
+    });
+    Ok(finish(report, artefacts, timer))
+}
+
+/// The scan flow: one body, one or more templates.
+///
+/// # Errors
+/// [`WorkError`].
+pub fn scan(ctx: &WorkContext, templates: &[Template], input: &BodyInput<'_>) -> Result<Outcome, WorkError> {
+    bodies(ctx, templates, std::slice::from_ref(input), None, &|_, _, _| {})
+}
