@@ -43,8 +43,8 @@ fn main() {
             let dir = root.join(sub);
             let mesh = read_mesh(&std::fs::read(dir.join(format!("{name}.glb"))).unwrap(), &GltfReadOptions::default())
                 .unwrap();
-            let lm = parse_landmarks(&std::fs::read_to_string(dir.join(format!("{name}.landmarks.json"))).unwrap())
-                .unwrap();
+            let lm =
+                parse_landmarks(&std::fs::read_to_string(dir.join(format!("{name}.landmarks.json"))).unwrap()).unwrap();
             let body = derive_features(mesh, &lm, &DeriveOptions::default()).unwrap();
             let maps = gpu.render(&body.mesh, &RenderOptions::default()).unwrap();
             let obstacle = Obstacle { maps, tree: WindingTree::new(&body.mesh, &WindingOptions::default()) };
@@ -65,7 +65,13 @@ fn main() {
                 }
                 worst = worst.max(d.strain_p95);
                 let h = r.hotspot.as_ref().map(|h| h.near.clone()).unwrap_or_default();
-                line += &format!(" {}:{:.2}%/{:.2}/{:.1}({h})", r.name, d.strain_p95 * 100.0, d.area_accuracy * 100.0, d.strain_max * 100.0);
+                line += &format!(
+                    " {}:{:.2}%/{:.2}/{:.1}({h})",
+                    r.name,
+                    d.strain_p95 * 100.0,
+                    d.area_accuracy * 100.0,
+                    d.strain_max * 100.0
+                );
             }
             if !g.pattern.darts_left_out.is_empty() {
                 line += &format!(" out:{:?}", g.pattern.darts_left_out.iter().map(|d| d.0.clone()).collect::<Vec<_>>());
@@ -73,5 +79,9 @@ fn main() {
             println!("{line}");
         }
     }
-    println!("pieces {n}, above 3 %: {above}, worst p95 {:.2} %, mean p95 {:.2} %", worst * 100.0, sum / n as f64 * 100.0);
+    println!(
+        "pieces {n}, above 3 %: {above}, worst p95 {:.2} %, mean p95 {:.2} %",
+        worst * 100.0,
+        sum / n as f64 * 100.0
+    );
 }

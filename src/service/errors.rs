@@ -60,12 +60,12 @@ pub fn chart_problem(e: &SizeChartError) -> Problem {
     let slug = match e {
         SizeChartError::Syntax { .. } => "chart-syntax",
         SizeChartError::UnknownColumn { .. } => "chart-unknown-column",
-        SizeChartError::NoSizeColumn { .. } => "chart-no-size-column",
+        SizeChartError::NoSizeColumn => "chart-no-size-column",
         SizeChartError::UnknownUnit { .. } => "chart-unknown-unit",
         SizeChartError::NotANumber { .. } => "chart-not-a-number",
         SizeChartError::OutOfRange { .. } => "chart-out-of-range",
         SizeChartError::LikelyInches { .. } => "chart-likely-inches",
-        SizeChartError::Empty { .. } => "chart-empty",
+        SizeChartError::Empty => "chart-empty",
         SizeChartError::TooManySizes { .. } => "chart-too-many-sizes",
         SizeChartError::DuplicateSize { .. } => "chart-duplicate-size",
         SizeChartError::EmptyRow { .. } => "chart-empty-row",
@@ -100,12 +100,12 @@ fn gltf_problem(e: &GltfError, field: &str, detail: String) -> Problem {
         | GltfError::IndexCount { .. }
         | GltfError::IndexOutOfRange { .. }
         | GltfError::NonFinitePosition { .. }
-        | GltfError::NoTriangles { .. }
+        | GltfError::NoTriangles
         | GltfError::Mesh { .. }
         | GltfError::BadNormal { .. } => StatusCode::BAD_REQUEST,
-        GltfError::LengthMismatch { .. } | GltfError::InvalidAttributeName { .. } | GltfError::NonFiniteOutput { .. } => {
-            return internal(&detail)
-        }
+        GltfError::LengthMismatch { .. }
+        | GltfError::InvalidAttributeName { .. }
+        | GltfError::NonFiniteOutput { .. } => return internal(&detail),
     };
     Problem::new(status, "scan-invalid", "Invalid body scan", detail).field(field)
 }
@@ -128,9 +128,10 @@ impl From<WorkError> for Problem {
     fn from(e: WorkError) -> Self {
         let detail = e.to_string();
         match &e {
-            WorkError::Model { .. } | WorkError::Render { .. } | WorkError::Export { .. } | WorkError::GarmentGlb { .. } => {
-                internal(&detail)
-            }
+            WorkError::Model { .. }
+            | WorkError::Render { .. }
+            | WorkError::Export { .. }
+            | WorkError::GarmentGlb { .. } => internal(&detail),
             WorkError::Fit { source, .. } => match source {
                 FitError::Mannequin { .. } | FitError::Landmark { .. } => internal(&detail),
                 FitError::Feature(f) => Problem::unprocessable(feature_slug(f), detail).field("chart"),
@@ -149,7 +150,9 @@ impl From<WorkError> for Problem {
                 };
                 Problem::bad_request(slug, detail).field("landmarks")
             }
-            WorkError::Feature { source, .. } => Problem::unprocessable(feature_slug(source), detail).field("landmarks"),
+            WorkError::Feature { source, .. } => {
+                Problem::unprocessable(feature_slug(source), detail).field("landmarks")
+            }
             WorkError::TooManyVertices { .. } => {
                 Problem::new(StatusCode::PAYLOAD_TOO_LARGE, "scan-too-many-vertices", "Body scan too large", detail)
                     .field("scan")

@@ -209,7 +209,8 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("grade3d-jobs-{}", std::process::id()));
         let path = dir.join("jobs.redb");
         let _ = std::fs::remove_file(&path);
-        let spec = JobSpec { templates: vec!["straight-skirt".into()], size_chart: None, bodies: vec![], base_size: None };
+        let spec =
+            JobSpec { templates: vec!["straight-skirt".into()], size_chart: None, bodies: vec![], base_size: None };
         let mut r = JobRecord {
             id: "abc".into(),
             spec,

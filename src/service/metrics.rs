@@ -3,7 +3,9 @@
 //! by route; time per pipeline stage; work queue depth; cache hits and
 //! misses (results and per-body obstacles); jobs by state.
 
-use prometheus::{Encoder, HistogramOpts, HistogramVec, IntCounterVec, IntGauge, IntGaugeVec, Opts, Registry, TextEncoder};
+use prometheus::{
+    Encoder, HistogramOpts, HistogramVec, IntCounterVec, IntGauge, IntGaugeVec, Opts, Registry, TextEncoder,
+};
 
 /// The service's metrics.
 #[derive(Debug, Clone)]
@@ -39,7 +41,8 @@ impl Metrics {
         )
         .expect("static metric");
         let latency = HistogramVec::new(
-            HistogramOpts::new("http_request_duration_seconds", "HTTP request latency").buckets(LATENCY_BUCKETS.to_vec()),
+            HistogramOpts::new("http_request_duration_seconds", "HTTP request latency")
+                .buckets(LATENCY_BUCKETS.to_vec()),
             &["route"],
         )
         .expect("static metric");
@@ -49,7 +52,8 @@ impl Metrics {
             &["stage"],
         )
         .expect("static metric");
-        let queue_depth = IntGauge::new("queue_depth", "Work items admitted to the pool and not finished").expect("static");
+        let queue_depth =
+            IntGauge::new("queue_depth", "Work items admitted to the pool and not finished").expect("static");
         let cache = IntCounterVec::new(Opts::new("cache_lookups_total", "Cache lookups"), &["cache", "outcome"])
             .expect("static metric");
         let jobs = IntGaugeVec::new(Opts::new("jobs", "Batch jobs by state"), &["state"]).expect("static metric");

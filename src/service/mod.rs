@@ -342,8 +342,16 @@ async fn metrics_text(State(s): State<AppState>) -> Response {
 
 // --- limits, authentication, parsing -------------------------------------------------------
 
-async fn body_bytes(s: &AppState, body: axum::body::Body) -> Result<Bytes, Problem> {
-    axum::body::to_bytes(body, s.0.cfg.max_body_bytes).await.map_err(|_| too_large(s.0.cfg.max_body_bytes))
+/// The request body, at most `max_body_bytes`: a declared `Content-Length`
+/// past the limit is refused before any of the body is read.
+async fn body_bytes(s: &AppState, headers: &HeaderMap, body: axum::body::Body) -> Result<Bytes, Problem> {
+    let max = s.0.cfg.max_body_bytes;
+    let declared =
+        headers.get(header::CONTENT_LENGTH).and_then(|v| v.to_str().ok()).and_then(|v| v.parse::<u64>().ok());
+    if declared.is_some_and(|n| n > max as u64) {
+        return Err(too_large(max));
+    }
+    axum::body::to_bytes(body, max).await.map_err(|_| too_large(max))
 }
 
 fn too_large(max: usize) -> Problem {
@@ -420,7 +428,9 @@ fn resolve_templates(s: &AppState, names: &[String], field: &str) -> Result<Vec<
             return Err(Problem::bad_request("duplicate-template", format!("template `{n}` named twice")).field(field));
         }
         let (v, json) = s.0.store.get_json(n, None).map_err(|e| match e {
-            store::StoreError::NotFound { .. } => Problem::unprocessable("unknown-template", e.to_string()).field(field),
+            store::StoreError::NotFound { .. } => {
+                Problem::unprocessable("unknown-template", e.to_string()).field(field)
+            }
             other => Problem::from(other),
         })?;
         let t = Template::from_json(&json).map_err(|e| errors::template_problem(&e))?;
@@ -463,8 +473,9 @@ async fn create_template(
     headers: HeaderMap,
     body: axum::body::Body,
 ) -> Result<Response, Problem> {
+    // the body is read before the key is checked: a refusal mid-upload would break the client's pipe
+    let bytes = body_bytes(&s, &headers, body).await?;
     check_key(&s, &headers, true)?;
-    let bytes = body_bytes(&s, body).await?;
     let text = std::str::from_utf8(&bytes).map_err(|_| Problem::bad_request("not-utf8", "the body is not UTF-8"))?;
     let me = s.clone();
     let text = text.to_owned();
@@ -480,9 +491,9 @@ async fn replace_template(
     Path(name): Path<String>,
     body: axum::body::Body,
 ) -> Result<Json<store::Entry>, Problem> {
+    let bytes = body_bytes(&s, &headers, body).await?;
     check_key(&s, &headers, true)?;
     valid_name(&name)?;
-    let bytes = body_bytes(&s, body).await?;
     let text =
         std::str::from_utf8(&bytes).map_err(|_| Problem::bad_request("not-utf8", "the body is not UTF-8"))?.to_owned();
     let me = s.clone();
@@ -616,7 +627,7 @@ async fn grade_size_chart(
 ) -> Result<Response, Problem> {
     check_key(&s, &headers, false)?;
     let Query(query) = query.map_err(|e| Problem::bad_request("invalid-query", e.body_text()).field("query"))?;
-    let bytes = body_bytes(&s, body).await?;
+    let bytes = body_bytes(&s, &headers, body).await?;
     let req = if media_is(&headers, "text/csv") {
         let text = std::str::from_utf8(&bytes)
             .map_err(|_| Problem::bad_request("not-utf8", "the CSV is not UTF-8").field("chart"))?;
@@ -665,7 +676,7 @@ async fn grade_scan(State(s): State<AppState>, headers: HeaderMap, req: Request)
     }
     let max = s.0.cfg.max_body_bytes;
     let (parts, body) = req.into_parts();
-    let bytes = body_bytes(&s, body).await?;
+    let bytes = body_bytes(&s, &headers, body).await?;
     let req = Request::from_parts(parts, axum::body::Body::from(bytes));
     let mut mp = Multipart::from_request(req, &s)
         .await
@@ -705,7 +716,8 @@ async fn grade_scan(State(s): State<AppState>, headers: HeaderMap, req: Request)
             }
         }
     }
-    let scan = scan.ok_or_else(|| Problem::bad_request("missing-part", "the `scan` part (GLB) is missing").field("scan"))?;
+    let scan =
+        scan.ok_or_else(|| Problem::bad_request("missing-part", "the `scan` part (GLB) is missing").field("scan"))?;
     let landmarks = landmarks
         .ok_or_else(|| Problem::bad_request("missing-part", "the `landmarks` part is missing").field("landmarks"))?;
     let landmarks = String::from_utf8(landmarks.to_vec())
@@ -722,9 +734,14 @@ async fn grade_scan(State(s): State<AppState>, headers: HeaderMap, req: Request)
     .await
 }
 
-async fn get_result(State(s): State<AppState>, headers: HeaderMap, Path(id): Path<String>) -> Result<Response, Problem> {
+async fn get_result(
+    State(s): State<AppState>,
+    headers: HeaderMap,
+    Path(id): Path<String>,
+) -> Result<Response, Problem> {
     check_key(&s, &headers, false)?;
-    let stored = s.0.results.get(&id).ok_or_else(|| Problem::not_found(format!("no result `{id}` (results expire)")))?;
+    let stored =
+        s.0.results.get(&id).ok_or_else(|| Problem::not_found(format!("no result `{id}` (results expire)")))?;
     Ok(answer(&stored, true))
 }
 
@@ -747,7 +764,8 @@ async fn get_result_artefact(
     Path((id, name)): Path<(String, String)>,
 ) -> Result<Response, Problem> {
     check_key(&s, &headers, false)?;
-    let stored = s.0.results.get(&id).ok_or_else(|| Problem::not_found(format!("no result `{id}` (results expire)")))?;
+    let stored =
+        s.0.results.get(&id).ok_or_else(|| Problem::not_found(format!("no result `{id}` (results expire)")))?;
     let a: &Artefact = stored
         .artefacts
         .iter()
@@ -780,12 +798,16 @@ fn job_view(s: &AppState, r: &JobRecord) -> serde_json::Value {
     })
 }
 
-async fn submit_job(State(s): State<AppState>, headers: HeaderMap, body: axum::body::Body) -> Result<Response, Problem> {
+async fn submit_job(
+    State(s): State<AppState>,
+    headers: HeaderMap,
+    body: axum::body::Body,
+) -> Result<Response, Problem> {
     check_key(&s, &headers, false)?;
     if !media_is(&headers, "application/json") {
         return Err(unsupported_media("application/json"));
     }
-    let bytes = body_bytes(&s, body).await?;
+    let bytes = body_bytes(&s, &headers, body).await?;
     let spec: JobSpec = parse_json_body(&bytes)?;
     let templates = resolve_templates(&s, &spec.templates, "templates")?;
     match (&spec.size_chart, spec.bodies.is_empty()) {
@@ -818,8 +840,9 @@ async fn submit_job(State(s): State<AppState>, headers: HeaderMap, body: axum::b
             }
         }
         _ => {
-            return Err(Problem::bad_request("job-input", "give exactly one of `size_chart` and `bodies`")
-                .field("size_chart"))
+            return Err(
+                Problem::bad_request("job-input", "give exactly one of `size_chart` and `bodies`").field("size_chart")
+            )
         }
     }
     let canonical = serde_json::to_vec(&spec).unwrap_or_default();
@@ -829,10 +852,13 @@ async fn submit_job(State(s): State<AppState>, headers: HeaderMap, body: axum::b
     let location = format!("/v1/jobs/{id}");
     if let Some(existing) = s.0.jobs.get(&id)? {
         if existing.state != JobState::Failed {
-            return Ok((StatusCode::ACCEPTED, [(header::LOCATION, location)], Json(job_view(&s, &existing))).into_response());
+            return Ok(
+                (StatusCode::ACCEPTED, [(header::LOCATION, location)], Json(job_view(&s, &existing))).into_response()
+            );
         }
     }
-    let pending = s.0.metrics.jobs.with_label_values(&["queued"]).get() + s.0.metrics.jobs.with_label_values(&["running"]).get();
+    let pending =
+        s.0.metrics.jobs.with_label_values(&["queued"]).get() + s.0.metrics.jobs.with_label_values(&["running"]).get();
     if pending >= s.0.cfg.max_pending_jobs as i64 {
         return Err(Problem::busy(30));
     }
@@ -875,7 +901,11 @@ fn run_job(s: &AppState, id: &str) {
             r.timings_ms = outcome.timings;
             r.report = Some(outcome.report);
             for a in outcome.artefacts {
-                r.artefacts.push(ArtefactEntry { name: a.name.clone(), media_type: a.media_type.into(), bytes: a.bytes.len() });
+                r.artefacts.push(ArtefactEntry {
+                    name: a.name.clone(),
+                    media_type: a.media_type.into(),
+                    bytes: a.bytes.len(),
+                });
                 stored.push((a.name, a.bytes));
             }
         }
@@ -1003,7 +1033,10 @@ mod tests {
         assert_eq!(resp.status(), StatusCode::UNAUTHORIZED);
         let resp = app(s.clone())
             .oneshot(
-                Request::delete("/v1/templates/trousers").header(header::AUTHORIZATION, "Bearer k").body(Body::empty()).unwrap(),
+                Request::delete("/v1/templates/trousers")
+                    .header(header::AUTHORIZATION, "Bearer k")
+                    .body(Body::empty())
+                    .unwrap(),
             )
             .await
             .unwrap();

@@ -26,11 +26,7 @@ pub struct PoolOptions {
 
 impl Default for PoolOptions {
     fn default() -> Self {
-        Self {
-            workers: std::thread::available_parallelism().map_or(2, |n| n.get()),
-            queue_depth: 16,
-            retry_after_s: 5,
-        }
+        Self { workers: std::thread::available_parallelism().map_or(2, |n| n.get()), queue_depth: 16, retry_after_s: 5 }
     }
 }
 

@@ -302,7 +302,11 @@ fn grade_body(
 
 /// The garment as GLB with the ease (distance to the body, mm) and the
 /// panel index as vertex attributes, and the fit figures of the report.
-fn garment_glb(g: &Graded, body: &FeatureBody, obstacle: Option<&Obstacle>) -> Result<(Vec<u8>, serde_json::Value), WorkError> {
+fn garment_glb(
+    g: &Graded,
+    body: &FeatureBody,
+    obstacle: Option<&Obstacle>,
+) -> Result<(Vec<u8>, serde_json::Value), WorkError> {
     let tris: Vec<[VertexId; 3]> = g.mesh.triangles.iter().map(|t| t.map(VertexId)).collect();
     let mesh = TriMesh::new(g.mesh.positions.clone(), tris).map_err(|e| WorkError::GarmentGlb(GltfError::Mesh(e)))?;
     let ease_mm: Vec<f64> = match obstacle {
@@ -440,7 +444,10 @@ pub fn size_chart(
             .residuals
             .iter()
             .map(|(id, r)| {
-                (id.as_str(), serde_json::json!({"target_m": r.target_m, "achieved_m": r.achieved_m, "error_mm": r.error_mm()}))
+                (
+                    id.as_str(),
+                    serde_json::json!({"target_m": r.target_m, "achieved_m": r.achieved_m, "error_mm": r.error_mm()}),
+                )
             })
             .collect();
         let mut garments = Vec::new();

@@ -1,0 +1,649 @@
+//! End-to-end tests of the HTTP service (issue #6) over real HTTP on
+//! loopback: the `grade3d serve` binary is started on a free port with a
+//! fresh data folder, and every route is called for success and failure
+//! with the fixture bodies. Also: a template written with 201 and a job
+//! accepted with 202 survive `kill -9` right after the response; a full
+//! queue answers 503 with `Retry-After`; batch jobs are deterministic
+//! (byte-identical artefacts from two servers); the contract test compares
+//! `openapi.yaml` with the router's route list both ways; the README's curl
+//! examples run as written.
+
+use std::io::{BufRead, BufReader, Read};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::{Duration, Instant};
+
+use base64::Engine;
+
+const KEY: &str = "test-key";
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn temp_dir(tag: &str) -> PathBuf {
+    static N: AtomicUsize = AtomicUsize::new(0);
+    let d = std::env::temp_dir().join(format!(
+        "grade3d-e2e-{tag}-{}-{}",
+        std::process::id(),
+        N.fetch_add(1, Ordering::Relaxed)
+    ));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// A running server; killed on drop.
+struct Server {
+    child: Child,
+    base: String,
+    data: PathBuf,
+}
+
+impl Server {
+    fn start(data: &Path, extra: &[(&str, &str)]) -> Server {
+        Self::start_with(data, extra, true)
+    }
+
+    fn start_with(data: &Path, extra: &[(&str, &str)], key: bool) -> Server {
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_grade3d"));
+        cmd.args(["serve", "--addr", "127.0.0.1:0", "--data-dir"]).arg(data).env("RUST_LOG", "warn");
+        if key {
+            cmd.env("GRADE3D_API_KEY", KEY);
+        } else {
+            cmd.env_remove("GRADE3D_API_KEY");
+        }
+        cmd.stdout(Stdio::piped()).stderr(Stdio::null());
+        for (k, v) in extra {
+            cmd.env(k, v);
+        }
+        let mut child = cmd.spawn().expect("grade3d serve starts");
+        let stdout = child.stdout.take().unwrap();
+        let mut lines = BufReader::new(stdout).lines();
+        let base = loop {
+            let line = lines.next().expect("server printed its address").unwrap();
+            if let Some(a) = line.strip_prefix("listening on ") {
+                break a.trim().to_owned();
+            }
+        };
+        std::thread::spawn(move || for _ in lines {});
+        let s = Server { child, base, data: data.to_owned() };
+        s.wait_ready();
+        s
+    }
+
+    fn wait_ready(&self) {
+        let start = Instant::now();
+        loop {
+            let r = call("GET", &self.url("/readyz"), &[], None);
+            if r.status == 200 {
+                return;
+            }
+            assert!(start.elapsed() < Duration::from_secs(60), "not ready: {}", r.text());
+            std::thread::sleep(Duration::from_millis(100));
+        }
+    }
+
+    fn url(&self, path: &str) -> String {
+        format!("{}{path}", self.base)
+    }
+
+    fn kill9(mut self) -> PathBuf {
+        let pid = self.child.id().to_string();
+        let ok = Command::new("kill").args(["-9", &pid]).status().unwrap();
+        assert!(ok.success());
+        let _ = self.child.wait();
+        self.data.clone()
+    }
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+struct Reply {
+    status: u16,
+    headers: Vec<(String, String)>,
+    body: Vec<u8>,
+}
+
+impl Reply {
+    fn text(&self) -> String {
+        String::from_utf8_lossy(&self.body).into_owned()
+    }
+    fn json(&self) -> serde_json::Value {
+        serde_json::from_slice(&self.body).unwrap_or_else(|e| panic!("not JSON ({e}): {}", self.text()))
+    }
+    fn header(&self, name: &str) -> Option<&str> {
+        self.headers.iter().find(|(k, _)| k.eq_ignore_ascii_case(name)).map(|(_, v)| v.as_str())
+    }
+    /// Asserts a problem+json of `status` naming `field` (when given).
+    fn problem(&self, status: u16, field: Option<&str>) -> serde_json::Value {
+        assert_eq!(self.status, status, "{}", self.text());
+        assert_eq!(self.header("content-type"), Some("application/problem+json"), "{}", self.text());
+        let p = self.json();
+        assert_eq!(p["status"], status);
+        assert!(p["type"].as_str().unwrap().starts_with("/problems/"));
+        assert!(!p["detail"].as_str().unwrap().is_empty());
+        if let Some(f) = field {
+            assert_eq!(p["field"], f, "{p}");
+        }
+        p
+    }
+}
+
+fn call(method: &str, url: &str, headers: &[(&str, &str)], body: Option<&[u8]>) -> Reply {
+    let agent = ureq::AgentBuilder::new().timeout(Duration::from_secs(300)).build();
+    let mut req = agent.request(method, url);
+    for (k, v) in headers {
+        req = req.set(k, v);
+    }
+    let res = match body {
+        Some(b) => req.send_bytes(b),
+        None => req.call(),
+    };
+    let resp = match res {
+        Ok(r) => r,
+        Err(ureq::Error::Status(_, r)) => r,
+        Err(e) => {
+            return Reply { status: 0, headers: vec![], body: e.to_string().into_bytes() };
+        }
+    };
+    let status = resp.status();
+    let headers =
+        resp.headers_names().into_iter().map(|n| (n.clone(), resp.header(&n).unwrap_or("").to_owned())).collect();
+    let mut body = Vec::new();
+    resp.into_reader().read_to_end(&mut body).unwrap();
+    Reply { status, headers, body }
+}
+
+fn auth() -> (&'static str, String) {
+    ("Authorization", format!("Bearer {KEY}"))
+}
+
+fn json_ct() -> (&'static str, &'static str) {
+    ("Content-Type", "application/json")
+}
+
+const CHART: &str = r#"{"unit":"cm","sizes":[
+  {"size":"S","measurements":{"bust_girth":86,"waist_girth":68,"hip_girth":94}},
+  {"size":"M","measurements":{"bust_girth":92,"waist_girth":74,"hip_girth":100}}]}"#;
+
+fn multipart(parts: &[(&str, Option<&str>, &[u8])]) -> (String, Vec<u8>) {
+    let boundary = "grade3d-test-boundary-7MA4YWxkTrZu0gW";
+    let mut body = Vec::new();
+    for (name, file, data) in parts {
+        body.extend_from_slice(format!("--{boundary}\r\n").as_bytes());
+        match file {
+            Some(f) => body.extend_from_slice(
+                format!("Content-Disposition: form-data; name=\"{name}\"; filename=\"{f}\"\r\nContent-Type: application/octet-stream\r\n\r\n")
+                    .as_bytes(),
+            ),
+            None => body.extend_from_slice(format!("Content-Disposition: form-data; name=\"{name}\"\r\n\r\n").as_bytes()),
+        }
+        body.extend_from_slice(data);
+        body.extend_from_slice(b"\r\n");
+    }
+    body.extend_from_slice(format!("--{boundary}--\r\n").as_bytes());
+    (format!("multipart/form-data; boundary={boundary}"), body)
+}
+
+/// Sends only a request head and returns the response as text.
+fn raw_head(s: &Server, line: &str, headers: &[(&str, &str)]) -> String {
+    use std::io::Write;
+    let addr = s.base.trim_start_matches("http://");
+    let mut tcp = std::net::TcpStream::connect(addr).unwrap();
+    tcp.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
+    let mut head = format!("{line} HTTP/1.1\r\nHost: {addr}\r\n");
+    for (k, v) in headers {
+        head += &format!("{k}: {v}\r\n");
+    }
+    head += "\r\n";
+    tcp.write_all(head.as_bytes()).unwrap();
+    let mut out = Vec::new();
+    let mut buf = [0u8; 4096];
+    while let Ok(n) = tcp.read(&mut buf) {
+        if n == 0 {
+            break;
+        }
+        out.extend_from_slice(&buf[..n]);
+        if String::from_utf8_lossy(&out).contains("\"status\":") {
+            break;
+        }
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+fn fixture(rel: &str) -> Vec<u8> {
+    std::fs::read(root().join("fixtures").join(rel)).unwrap()
+}
+
+fn wait_job(s: &Server, href: &str) -> serde_json::Value {
+    let start = Instant::now();
+    loop {
+        let r = call("GET", &s.url(href), &[], None);
+        assert_eq!(r.status, 200, "{}", r.text());
+        let j = r.json();
+        match j["state"].as_str().unwrap() {
+            "done" => return j,
+            "failed" => panic!("job failed: {j}"),
+            _ => {}
+        }
+        assert!(start.elapsed() < Duration::from_secs(300), "job did not finish: {j}");
+        std::thread::sleep(Duration::from_millis(200));
+    }
+}
+
+#[test]
+fn health_readiness_metrics_and_unknown_routes() {
+    let s = Server::start(&temp_dir("health"), &[]);
+    let r = call("GET", &s.url("/healthz"), &[], None);
+    assert_eq!((r.status, r.text().as_str()), (200, "ok"));
+    let r = call("GET", &s.url("/readyz"), &[], None);
+    assert_eq!(r.json()["templates"], 3);
+    call("GET", &s.url("/v1/templates"), &[], None);
+    let r = call("GET", &s.url("/metrics"), &[], None);
+    assert_eq!(r.status, 200);
+    let m = r.text();
+    for name in [
+        "grade3d_http_requests_total{method=\"GET\",route=\"/v1/templates\",status=\"200\"}",
+        "grade3d_http_request_duration_seconds_bucket",
+        "grade3d_queue_depth",
+    ] {
+        assert!(m.contains(name), "{name} not in\n{m}");
+    }
+    call("GET", &s.url("/no/such/route"), &[], None).problem(404, None);
+    call("PATCH", &s.url("/v1/templates"), &[], None).problem(405, None);
+}
+
+#[test]
+fn template_library_over_http() {
+    let s = Server::start(&temp_dir("templates"), &[]);
+    let list = call("GET", &s.url("/v1/templates"), &[], None).json();
+    let names: Vec<&str> = list.as_array().unwrap().iter().map(|e| e["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["fitted-bodice", "straight-skirt", "trousers"]);
+    let skirt = call("GET", &s.url("/v1/templates/straight-skirt"), &[], None);
+    assert_eq!(skirt.status, 200);
+    assert_eq!(skirt.header("x-template-version"), Some("1"));
+    call("GET", &s.url("/v1/templates/nope"), &[], None).problem(404, Some("name"));
+    call("GET", &s.url("/v1/templates/straight-skirt?version=9"), &[], None).problem(404, Some("name"));
+    call("GET", &s.url("/v1/templates/straight-skirt?version=x"), &[], None).problem(400, Some("version"));
+
+    let mut doc = skirt.json();
+    doc["name"] = "mini-skirt".into();
+    let body = doc.to_string();
+    let (a, k) = auth();
+    // writes need the key
+    call("POST", &s.url("/v1/templates"), &[json_ct()], Some(body.as_bytes())).problem(401, Some("Authorization"));
+    call("POST", &s.url("/v1/templates"), &[json_ct(), ("Authorization", "Bearer nope")], Some(body.as_bytes()))
+        .problem(401, None);
+    let r = call("POST", &s.url("/v1/templates"), &[json_ct(), (a, &k)], Some(body.as_bytes()));
+    assert_eq!(r.status, 201, "{}", r.text());
+    assert_eq!(r.header("location"), Some("/v1/templates/mini-skirt"));
+    assert_eq!(r.json()["version"], 1);
+    call("POST", &s.url("/v1/templates"), &[json_ct(), (a, &k)], Some(body.as_bytes())).problem(409, Some("name"));
+    call("POST", &s.url("/v1/templates"), &[json_ct(), (a, &k)], Some(b"{\"not\":\"a template\"}")).problem(422, None);
+    call("POST", &s.url("/v1/templates"), &[json_ct(), (a, &k)], Some(b"{oops")).problem(422, Some("template"));
+    // a new version; the old one stays readable by number
+    doc["description"] = "shorter".into();
+    let r = call("PUT", &s.url("/v1/templates/mini-skirt"), &[json_ct(), (a, &k)], Some(doc.to_string().as_bytes()));
+    assert_eq!(r.status, 200, "{}", r.text());
+    assert_eq!(r.json()["version"], 2);
+    let v1 = call("GET", &s.url("/v1/templates/mini-skirt?version=1"), &[], None).json();
+    assert_ne!(v1["description"], "shorter");
+    assert_eq!(call("GET", &s.url("/v1/templates/mini-skirt"), &[], None).json()["description"], "shorter");
+    call("PUT", &s.url("/v1/templates/other-name"), &[json_ct(), (a, &k)], Some(doc.to_string().as_bytes()))
+        .problem(400, Some("name"));
+    call("PUT", &s.url("/v1/templates/mini-skirt"), &[json_ct()], Some(doc.to_string().as_bytes())).problem(401, None);
+    let r = call("DELETE", &s.url("/v1/templates/mini-skirt"), &[(a, &k)], None);
+    assert_eq!(r.status, 204);
+    call("DELETE", &s.url("/v1/templates/mini-skirt"), &[(a, &k)], None).problem(404, Some("name"));
+    call("GET", &s.url("/v1/templates/mini-skirt"), &[], None).problem(404, None);
+}
+
+#[test]
+fn writes_are_refused_without_a_configured_key_and_reads_can_be_protected() {
+    let s = Server::start(&temp_dir("protect"), &[("GRADE3D_PROTECT_READS", "true")]);
+    call("GET", &s.url("/v1/templates"), &[], None).problem(401, None);
+    let (a, k) = auth();
+    assert_eq!(call("GET", &s.url("/v1/templates"), &[(a, &k)], None).status, 200);
+    assert_eq!(call("GET", &s.url("/healthz"), &[], None).status, 200);
+    let s = Server::start_with(&temp_dir("nokey"), &[], false);
+    assert_eq!(call("GET", &s.url("/v1/templates"), &[], None).status, 200);
+    call("DELETE", &s.url("/v1/templates/trousers"), &[(a, &k)], None).problem(403, None);
+}
+
+#[test]
+fn size_chart_flow_json_and_csv() {
+    let s = Server::start(&temp_dir("chart"), &[]);
+    let body = format!(r#"{{"templates":["straight-skirt"],"chart":{CHART},"base_size":"S"}}"#);
+    let r = call("POST", &s.url("/v1/grade/size-chart"), &[json_ct()], Some(body.as_bytes()));
+    assert_eq!(r.status, 200, "{}", r.text());
+    let j = r.json();
+    assert_eq!(j["cached"], false);
+    assert_eq!(j["report"]["sizes"].as_array().unwrap().len(), 2);
+    let names: Vec<String> =
+        j["artefacts"].as_array().unwrap().iter().map(|a| a["name"].as_str().unwrap().into()).collect();
+    for want in [
+        "straight-skirt-S.pattern.svg",
+        "straight-skirt-M.pattern.dxf",
+        "straight-skirt-M.garment.glb",
+        "straight-skirt.nest.svg",
+        "straight-skirt.nest.dxf",
+        "straight-skirt.rules.csv",
+        "straight-skirt.rules.rul",
+        "report.json",
+    ] {
+        assert!(names.iter().any(|n| n == want), "{want} missing from {names:?}");
+    }
+    let nest = call("GET", &s.url(&format!("{}/straight-skirt.nest.svg", j["href"].as_str().unwrap())), &[], None);
+    assert_eq!(nest.header("content-type"), Some("image/svg+xml"));
+    assert!(roxmltree::Document::parse(&nest.text()).is_ok());
+    let glb = call("GET", &s.url(&format!("{}/straight-skirt-M.garment.glb", j["href"].as_str().unwrap())), &[], None);
+    assert_eq!(&glb.body[..4], b"glTF");
+    assert!(glb.text().contains("_EASE_MM"));
+    // served from the cache the second time, same id
+    let again = call("POST", &s.url("/v1/grade/size-chart"), &[json_ct()], Some(body.as_bytes())).json();
+    assert_eq!((again["cached"].as_bool(), &again["id"]), (Some(true), &j["id"]));
+    let result = call("GET", &s.url(j["href"].as_str().unwrap()), &[], None).json();
+    assert_eq!(result["id"], j["id"]);
+    // CSV in inches with the templates in the query
+    let csv = "size,unit,bust_girth,waist_girth_curvy\n8,in,35.5,28.375\n10,in,36.5,29.375\n";
+    let r = call(
+        "POST",
+        &s.url("/v1/grade/size-chart?templates=straight-skirt"),
+        &[("Content-Type", "text/csv")],
+        Some(csv.as_bytes()),
+    );
+    assert_eq!(r.status, 200, "{}", r.text());
+    // failures, each naming its field
+    let bad = |b: &str| call("POST", &s.url("/v1/grade/size-chart"), &[json_ct()], Some(b.as_bytes()));
+    bad(r#"{"templates":["nope"],"chart":{"sizes":[]}}"#).problem(422, Some("templates"));
+    bad(r#"{"templates":[],"chart":"size\n"}"#).problem(400, Some("templates"));
+    bad(r#"{"templates":["straight-skirt"],"chart":{"unit":"cm","sizes":[{"size":"S","measurements":{"shoe_size":40}}]}}"#)
+        .problem(400, Some("chart"));
+    bad(r#"{"templates":["straight-skirt"],"chart":{"unit":"cm","sizes":[{"size":"S","measurements":{"bust_girth":9000}}]}}"#)
+        .problem(400, Some("chart"));
+    bad(r#"{"templates":["straight-skirt"],"chart":42}"#).problem(400, Some("chart"));
+    bad(r#"{"templates":"straight-skirt","chart":{}}"#).problem(400, Some("body.templates"));
+    bad(&format!(r#"{{"templates":["straight-skirt"],"chart":{CHART},"base_size":"XXL"}}"#))
+        .problem(400, Some("base_size"));
+    call("POST", &s.url("/v1/grade/size-chart"), &[("Content-Type", "text/plain")], Some(b"x")).problem(415, None);
+    call("GET", &s.url("/v1/results/0000"), &[], None).problem(404, None);
+    call("GET", &s.url(&format!("{}/nope.svg", j["href"].as_str().unwrap())), &[], None).problem(404, Some("artefact"));
+}
+
+#[test]
+fn scan_flow_multipart() {
+    let s = Server::start(&temp_dir("scan"), &[("GRADE3D_MAX_BODY_BYTES", "4000000")]);
+    let glb = fixture("bodies/female-average-caucasian.glb");
+    let lm = fixture("bodies/female-average-caucasian.landmarks.json");
+    let (ct, body) = multipart(&[
+        ("scan", Some("body.glb"), &glb),
+        ("landmarks", Some("lm.json"), &lm),
+        ("template", None, b"trousers"),
+    ]);
+    let r = call("POST", &s.url("/v1/grade/scan"), &[("Content-Type", &ct)], Some(&body));
+    assert_eq!(r.status, 200, "{}", r.text());
+    let j = r.json();
+    assert_eq!(j["flow"], "scan");
+    assert!(j["expires_in_s"].as_u64().unwrap() > 0);
+    let garment = &j["report"]["bodies"][0]["garments"][0];
+    assert_eq!(garment["fit"]["vertices_inside_body"], 0);
+    assert!(garment["fit"]["girth_ease_mm"]["hip_girth"].as_f64().unwrap() > 0.0);
+    let href = j["href"].as_str().unwrap();
+    let g = call("GET", &s.url(&format!("{href}/trousers-scan.garment.glb")), &[], None);
+    assert_eq!((g.status, &g.body[..4]), (200, &b"glTF"[..]));
+    let svg = call("GET", &s.url(&format!("{href}/trousers-scan.pattern.svg")), &[], None);
+    assert!(roxmltree::Document::parse(&svg.text()).is_ok());
+    // failures
+    let post = |parts: &[(&str, Option<&str>, &[u8])]| {
+        let (ct, body) = multipart(parts);
+        call("POST", &s.url("/v1/grade/scan"), &[("Content-Type", &ct)], Some(&body))
+    };
+    post(&[("landmarks", None, &lm), ("template", None, b"trousers")]).problem(400, Some("scan"));
+    post(&[("scan", None, &glb), ("template", None, b"trousers")]).problem(400, Some("landmarks"));
+    post(&[("scan", None, &glb), ("landmarks", None, &lm)]).problem(400, Some("template"));
+    post(&[("scan", None, b"not a glb"), ("landmarks", None, &lm), ("template", None, b"trousers")])
+        .problem(400, Some("scan"));
+    post(&[("scan", None, &glb), ("landmarks", None, b"{}"), ("template", None, b"trousers")])
+        .problem(400, Some("landmarks"));
+    post(&[("scan", None, &glb), ("landmarks", None, &lm), ("template", None, b"nope")]).problem(422, Some("template"));
+    post(&[("scan", None, &glb), ("landmarks", None, &lm), ("template", None, b"trousers"), ("extra", None, b"1")])
+        .problem(400, Some("extra"));
+    // landmarks far off the body
+    let mut moved: serde_json::Value = serde_json::from_slice(&lm).unwrap();
+    moved["points"]["waist_front"] = serde_json::json!([0.0, 5.0, 0.0]);
+    post(&[("scan", None, &glb), ("landmarks", None, moved.to_string().as_bytes()), ("template", None, b"trousers")])
+        .problem(422, Some("landmarks"));
+    // over the body limit: refused from the declared length, before the body is sent
+    let raw = raw_head(&s, "POST /v1/grade/scan", &[("Content-Type", &ct), ("Content-Length", "4100000")]);
+    assert!(raw.starts_with("HTTP/1.1 413"), "{raw}");
+    assert!(raw.contains("application/problem+json") && raw.contains("body-too-large"), "{raw}");
+    call("POST", &s.url("/v1/grade/scan"), &[json_ct()], Some(b"{}")).problem(415, None);
+}
+
+fn job_spec_bodies() -> String {
+    let enc = |rel: &str| base64::engine::general_purpose::STANDARD.encode(fixture(rel));
+    let lm = |rel: &str| -> serde_json::Value { serde_json::from_slice(&fixture(rel)).unwrap() };
+    serde_json::json!({
+        "templates": ["straight-skirt"],
+        "bodies": [
+            {"name": "avg", "glb_base64": enc("bodies/female-average-caucasian.glb"), "landmarks": lm("bodies/female-average-caucasian.landmarks.json")},
+            {"name": "tall", "glb_base64": enc("bodies/female-heavy-tall-african.glb"), "landmarks": lm("bodies/female-heavy-tall-african.landmarks.json")},
+        ],
+        "base_size": "avg",
+    })
+    .to_string()
+}
+
+#[test]
+fn batch_jobs_are_deterministic_and_fail_with_named_fields() {
+    let a = Server::start(&temp_dir("jobs-a"), &[]);
+    let spec = format!(r#"{{"templates":["straight-skirt","trousers"],"size_chart":{CHART},"base_size":"M"}}"#);
+    let r = call("POST", &a.url("/v1/jobs"), &[json_ct()], Some(spec.as_bytes()));
+    assert_eq!(r.status, 202, "{}", r.text());
+    let href = r.header("location").unwrap().to_owned();
+    let done = wait_job(&a, &href);
+    assert_eq!(done["progress"]["stage"], "done");
+    // the same request is the same job
+    let again = call("POST", &a.url("/v1/jobs"), &[json_ct()], Some(spec.as_bytes()));
+    assert_eq!((again.status, again.header("location")), (202, Some(href.as_str())));
+    // a second server with its own data grades it to byte-identical artefacts
+    let b = Server::start(&temp_dir("jobs-b"), &[]);
+    let r = call("POST", &b.url("/v1/jobs"), &[json_ct()], Some(spec.as_bytes()));
+    assert_eq!(r.header("location"), Some(href.as_str()));
+    let done_b = wait_job(&b, &href);
+    let arts = done["artefacts"].as_array().unwrap();
+    assert_eq!(arts.len(), done_b["artefacts"].as_array().unwrap().len());
+    assert_eq!(
+        arts.len(),
+        2 * (2 * 4 + 4) + 1,
+        "2 templates × (2 sizes × 4 + nest, nest DXF, rules CSV, RUL) + report"
+    );
+    for art in arts {
+        let h = art["href"].as_str().unwrap();
+        let (x, y) = (call("GET", &a.url(h), &[], None), call("GET", &b.url(h), &[], None));
+        assert_eq!(x.status, 200);
+        assert!(x.body == y.body, "{h} differs between two runs");
+    }
+    // bodies (scans) instead of a chart
+    let r = call("POST", &a.url("/v1/jobs"), &[json_ct()], Some(job_spec_bodies().as_bytes()));
+    assert_eq!(r.status, 202, "{}", r.text());
+    let done = wait_job(&a, r.header("location").unwrap());
+    let names: Vec<&str> = done["artefacts"].as_array().unwrap().iter().map(|a| a["name"].as_str().unwrap()).collect();
+    assert!(
+        names.contains(&"straight-skirt.nest.dxf") && names.contains(&"straight-skirt-tall.garment.glb"),
+        "{names:?}"
+    );
+    // failures
+    let bad = |b: &str| call("POST", &a.url("/v1/jobs"), &[json_ct()], Some(b.as_bytes()));
+    bad(&format!(r#"{{"templates":["straight-skirt"],"size_chart":{CHART},"bodies":[{{"name":"x","glb_base64":"","landmarks":{{}}}}]}}"#))
+        .problem(400, Some("size_chart"));
+    bad(r#"{"templates":["straight-skirt"]}"#).problem(400, Some("size_chart"));
+    bad(r#"{"templates":["nope"],"size_chart":"size\n"}"#).problem(422, Some("templates"));
+    bad(r#"{"templates":["straight-skirt"],"bodies":[{"name":"x","glb_base64":"***","landmarks":{}}]}"#)
+        .problem(400, Some("bodies[0].glb_base64"));
+    bad(r#"{"templates":["straight-skirt"],"bodies":[{"name":"a/b","glb_base64":"","landmarks":{}}]}"#)
+        .problem(400, Some("bodies[0].name"));
+    bad(r#"{"templates":["straight-skirt"],"size_chart":{},"colour":"red"}"#).problem(400, Some("body.colour"));
+    call("POST", &a.url("/v1/jobs"), &[("Content-Type", "text/csv")], Some(b"size\n")).problem(415, None);
+    call("GET", &a.url("/v1/jobs/nope"), &[], None).problem(404, None);
+    call("GET", &a.url(&format!("{href}/artefacts/nope.svg")), &[], None).problem(404, Some("artefact"));
+    // a job whose body is not a body fails, and says why
+    let r = bad(r#"{"templates":["straight-skirt"],"bodies":[{"name":"x","glb_base64":"AAAA","landmarks":{}}]}"#);
+    assert_eq!(r.status, 202);
+    let href = r.header("location").unwrap().to_owned();
+    let start = Instant::now();
+    let failed = loop {
+        let j = call("GET", &a.url(&href), &[], None).json();
+        if j["state"] == "failed" {
+            break j;
+        }
+        assert!(start.elapsed() < Duration::from_secs(60), "{j}");
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    assert_eq!(failed["error"]["field"], "scan", "{failed}");
+}
+
+#[test]
+fn accepted_writes_survive_kill_9() {
+    let d = temp_dir("kill9");
+    let s = Server::start(&d, &[]);
+    let mut doc = call("GET", &s.url("/v1/templates/trousers"), &[], None).json();
+    doc["name"] = "crash-trousers".into();
+    let (a, k) = auth();
+    let r = call("POST", &s.url("/v1/templates"), &[json_ct(), (a, &k)], Some(doc.to_string().as_bytes()));
+    assert_eq!(r.status, 201);
+    let d = s.kill9();
+    let s = Server::start(&d, &[]);
+    let back = call("GET", &s.url("/v1/templates/crash-trousers"), &[], None);
+    assert_eq!(back.status, 200, "the 201 write was lost");
+    assert_eq!(back.json()["name"], "crash-trousers");
+    // a job accepted with 202 and killed before it ran is run after the restart
+    let spec = format!(r#"{{"templates":["crash-trousers"],"size_chart":{CHART}}}"#);
+    let r = call("POST", &s.url("/v1/jobs"), &[json_ct()], Some(spec.as_bytes()));
+    assert_eq!(r.status, 202);
+    let href = r.header("location").unwrap().to_owned();
+    let d = s.kill9();
+    let s = Server::start(&d, &[]);
+    let done = wait_job(&s, &href);
+    assert!(!done["artefacts"].as_array().unwrap().is_empty());
+}
+
+#[test]
+fn a_full_queue_answers_503_with_retry_after() {
+    let s = Server::start(&temp_dir("busy"), &[("GRADE3D_WORKERS", "1"), ("GRADE3D_QUEUE_DEPTH", "0")]);
+    let url = s.url("/v1/grade/size-chart");
+    let handles: Vec<_> = (0..4)
+        .map(|i| {
+            let url = url.clone();
+            std::thread::spawn(move || {
+                let body = format!(
+                    r#"{{"templates":["straight-skirt"],"chart":{{"unit":"cm","sizes":[{{"size":"S","measurements":{{"bust_girth":{}}}}}]}}}}"#,
+                    86 + i
+                );
+                call("POST", &url, &[("Content-Type", "application/json")], Some(body.as_bytes()))
+            })
+        })
+        .collect();
+    let replies: Vec<Reply> = handles.into_iter().map(|h| h.join().unwrap()).collect();
+    let statuses: Vec<u16> = replies.iter().map(|r| r.status).collect();
+    assert!(statuses.iter().all(|&c| c == 200 || c == 503), "{statuses:?}");
+    let busy: Vec<&Reply> = replies.iter().filter(|r| r.status == 503).collect();
+    assert!(!busy.is_empty() && statuses.contains(&200), "{statuses:?}");
+    for r in busy {
+        r.problem(503, None);
+        assert!(r.header("retry-after").is_some());
+    }
+}
+
+/// The router's routes (`ROUTES`) and `openapi.yaml`'s paths and methods
+/// are the same set, both ways.
+#[test]
+fn openapi_and_router_agree() {
+    let text = std::fs::read_to_string(root().join("openapi.yaml")).unwrap();
+    assert!(text.starts_with("openapi: 3.1") || text.contains("\nopenapi: 3.1"), "OpenAPI 3.1");
+    let mut spec: Vec<(String, String)> = Vec::new();
+    let mut in_paths = false;
+    let mut path = String::new();
+    for line in text.lines() {
+        if line.starts_with("paths:") {
+            in_paths = true;
+            continue;
+        }
+        if in_paths && !line.starts_with(' ') && !line.trim().is_empty() {
+            in_paths = false;
+        }
+        if !in_paths {
+            continue;
+        }
+        if let Some(p) = line.strip_prefix("  /") {
+            path = format!("/{}", p.trim_end_matches(':').trim_end_matches(':').trim().trim_end_matches(':'));
+            path = path.trim_matches('"').trim_matches('\'').to_owned();
+        } else if let Some(m) = line.strip_prefix("    ") {
+            let m = m.trim_end().trim_end_matches(':');
+            if ["get", "post", "put", "delete", "patch"].contains(&m) {
+                spec.push((m.to_uppercase(), path.clone()));
+            }
+        }
+    }
+    spec.sort();
+    let mut code: Vec<(String, String)> =
+        grade3d::service::ROUTES.iter().map(|(m, p)| ((*m).to_owned(), (*p).to_owned())).collect();
+    code.sort();
+    assert_eq!(spec, code, "openapi.yaml (left) and service::ROUTES (right) disagree");
+}
+
+/// The README's curl examples (the block between `<!-- e2e:begin -->` and
+/// `<!-- e2e:end -->`) run as written against `grade3d serve` with its
+/// defaults on 127.0.0.1:8080.
+#[test]
+fn readme_curl_examples_work_as_written() {
+    let readme = std::fs::read_to_string(root().join("README.md")).unwrap();
+    let (Some(a), Some(b)) = (readme.find("<!-- e2e:begin -->"), readme.find("<!-- e2e:end -->")) else {
+        panic!("README.md has no e2e block");
+    };
+    let block = &readme[a..b];
+    let script: String = block
+        .lines()
+        .skip_while(|l| !l.starts_with("```sh"))
+        .filter(|l| !l.starts_with("```") && !l.starts_with("<!--"))
+        .collect::<Vec<_>>()
+        .join("\n");
+    assert!(script.contains("curl"), "no curl in the README block");
+    // the defaults: 127.0.0.1:8080, data in ./grade3d-data of the server's folder
+    let cwd = temp_dir("readme");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_grade3d"))
+        .arg("serve")
+        .current_dir(&cwd)
+        .env_remove("GRADE3D_ADDR")
+        .env_remove("GRADE3D_DATA_DIR")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while call("GET", "http://127.0.0.1:8080/readyz", &[], None).status != 200 {
+        assert!(start.elapsed() < Duration::from_secs(60), "server on 8080 not ready");
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    let out = Command::new("bash")
+        .args(["-euo", "pipefail", "-c", &script])
+        .current_dir(root())
+        .env("OUT", &cwd)
+        .output()
+        .unwrap();
+    let _ = child.kill();
+    let _ = child.wait();
+    assert!(
+        out.status.success(),
+        "README examples failed:\n{}\n{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
