@@ -5,12 +5,13 @@
 #![expect(missing_docs, reason = "criterion_group! generates undocumented items")]
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use grade3d::collide::cache::Obstacle;
+use grade3d::collide::cache::{Obstacle, ObstacleCache, ObstacleCacheOptions};
 use grade3d::collide::render::{GpuContext, RenderOptions};
 use grade3d::geom::winding::{WindingOptions, WindingTree};
 use grade3d::pattern::export::{dxf, svg};
 use grade3d::pattern::garment::{pattern, PatternOptions};
 use grade3d::pipeline::{grade, GradeOptions};
+use grade3d::service::work::{self, BodyInput, WorkContext, WorkOptions};
 use grade3d::template::library::{builtin, reference_body};
 
 fn benches(c: &mut Criterion) {
@@ -41,6 +42,26 @@ fn benches(c: &mut Criterion) {
             (s, d)
         })
     });
+    // the scan flow as the service runs it for one request: read the GLB and
+    // landmarks, derive the feature model, render the depth maps and build the
+    // winding tree (scans are not cached), grade, write SVG, DXF, JSON, GLB
+    // and the report
+    if let Ok(gpu) = GpuContext::new() {
+        let ctx = WorkContext {
+            gpu: Some(std::sync::Arc::new(gpu)),
+            obstacles: std::sync::Arc::new(ObstacleCache::new(ObstacleCacheOptions::default())),
+            opts: WorkOptions::default(),
+        };
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/bodies");
+        let glb = std::fs::read(root.join("female-average-caucasian.glb")).expect("fixture");
+        let lm = std::fs::read_to_string(root.join("female-average-caucasian.landmarks.json")).expect("fixture");
+        let input = BodyInput { name: "scan", glb: &glb, landmarks: &lm };
+        let once = work::scan(&ctx, std::slice::from_ref(&t), &input).expect("scan flow");
+        eprintln!("scan flow stage timings (ms): {:?}", once.timings);
+        g.bench_function("scan_flow_request", |b| {
+            b.iter(|| work::scan(&ctx, std::slice::from_ref(&t), &input).expect("scan flow"))
+        });
+    }
     g.finish();
 }
 

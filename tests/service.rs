@@ -647,3 +647,27 @@ fn readme_curl_examples_work_as_written() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+#[test]
+fn scan_results_expire_and_slow_requests_time_out() {
+    let s = Server::start(&temp_dir("ttl"), &[("GRADE3D_SCAN_TTL_S", "1"), ("GRADE3D_REQUEST_TIMEOUT_S", "1")]);
+    let glb = fixture("bodies/male-average-asian.glb");
+    let lm = fixture("bodies/male-average-asian.landmarks.json");
+    let (ct, body) =
+        multipart(&[("scan", Some("b.glb"), &glb), ("landmarks", None, &lm), ("template", None, b"straight-skirt")]);
+    let r = call("POST", &s.url("/v1/grade/scan"), &[("Content-Type", &ct)], Some(&body));
+    assert_eq!(r.status, 200, "{}", r.text());
+    let href = r.json()["href"].as_str().unwrap().to_owned();
+    std::thread::sleep(Duration::from_millis(1500));
+    call("GET", &s.url(&href), &[], None).problem(404, None);
+    call("GET", &s.url(&format!("{href}/report.json")), &[], None).problem(404, None);
+    // eight mannequins take longer than the 1 s limit
+    let sizes: Vec<serde_json::Value> = (0..8)
+        .map(|i| serde_json::json!({"size": format!("S{i}"), "measurements": {"bust_girth": 80 + 4 * i, "hip_girth": 88 + 4 * i}}))
+        .collect();
+    let body = serde_json::json!({"templates": ["trousers"], "chart": {"unit": "cm", "sizes": sizes}}).to_string();
+    let r = call("POST", &s.url("/v1/grade/size-chart"), &[json_ct()], Some(body.as_bytes()));
+    let p = r.problem(503, None);
+    assert_eq!(p["type"], "/problems/timeout", "{p}");
+    assert!(r.header("retry-after").is_some());
+}
