@@ -126,7 +126,7 @@ mod tests {
 
     #[test]
     fn least_recently_used_goes_first_and_expired_entries_are_gone() {
-        let c = ResultCache::new(3 * 2048);
+        let c = ResultCache::new(2 * 2048);
         c.put("a".into(), stored(1000, None));
         c.put("b".into(), stored(1000, None));
         assert!(c.get("a").is_some());
