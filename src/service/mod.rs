@@ -1016,31 +1016,16 @@ mod tests {
     #[tokio::test]
     async fn writes_need_the_key() {
         let (s, dir) = state();
-        let resp = app(s.clone())
-            .oneshot(Request::delete("/v1/templates/trousers").body(Body::empty()).unwrap())
-            .await
-            .unwrap();
-        assert_eq!(resp.status(), StatusCode::UNAUTHORIZED);
-        let resp = app(s.clone())
-            .oneshot(
-                Request::delete("/v1/templates/trousers")
-                    .header(header::AUTHORIZATION, "Bearer wrong")
-                    .body(Body::empty())
-                    .unwrap(),
-            )
-            .await
-            .unwrap();
-        assert_eq!(resp.status(), StatusCode::UNAUTHORIZED);
-        let resp = app(s.clone())
-            .oneshot(
-                Request::delete("/v1/templates/trousers")
-                    .header(header::AUTHORIZATION, "Bearer k")
-                    .body(Body::empty())
-                    .unwrap(),
-            )
-            .await
-            .unwrap();
-        assert_eq!(resp.status(), StatusCode::NO_CONTENT);
+        let delete = |key: Option<&str>| {
+            let mut req = Request::delete("/v1/templates/trousers");
+            if let Some(k) = key {
+                req = req.header(header::AUTHORIZATION, format!("Bearer {k}"));
+            }
+            app(s.clone()).oneshot(req.body(Body::empty()).unwrap())
+        };
+        assert_eq!(delete(None).await.unwrap().status(), StatusCode::UNAUTHORIZED);
+        assert_eq!(delete(Some("wrong")).await.unwrap().status(), StatusCode::UNAUTHORIZED);
+        assert_eq!(delete(Some("k")).await.unwrap().status(), StatusCode::NO_CONTENT);
         assert_eq!(s.0.store.list().unwrap().len(), 2);
         let _ = std::fs::remove_dir_all(dir);
     }
