@@ -354,6 +354,10 @@ async fn body_bytes(s: &AppState, headers: &HeaderMap, body: axum::body::Body) -
     axum::body::to_bytes(body, max).await.map_err(|_| too_large(max))
 }
 
+fn utf8(bytes: Bytes) -> Result<String, Problem> {
+    String::from_utf8(bytes.to_vec()).map_err(|_| Problem::bad_request("not-utf8", "the body is not UTF-8"))
+}
+
 fn too_large(max: usize) -> Problem {
     Problem::new(
         StatusCode::PAYLOAD_TOO_LARGE,
@@ -476,9 +480,8 @@ async fn create_template(
     // the body is read before the key is checked: a refusal mid-upload would break the client's pipe
     let bytes = body_bytes(&s, &headers, body).await?;
     check_key(&s, &headers, true)?;
-    let text = std::str::from_utf8(&bytes).map_err(|_| Problem::bad_request("not-utf8", "the body is not UTF-8"))?;
+    let text = utf8(bytes)?;
     let me = s.clone();
-    let text = text.to_owned();
     let limit = Duration::from_secs(s.0.cfg.request_timeout_s);
     let entry = s.0.pool.run(limit, move || me.0.store.put(None, &text, true)).await??;
     let location = format!("/v1/templates/{}", entry.name);
@@ -494,8 +497,7 @@ async fn replace_template(
     let bytes = body_bytes(&s, &headers, body).await?;
     check_key(&s, &headers, true)?;
     valid_name(&name)?;
-    let text =
-        std::str::from_utf8(&bytes).map_err(|_| Problem::bad_request("not-utf8", "the body is not UTF-8"))?.to_owned();
+    let text = utf8(bytes)?;
     let me = s.clone();
     let limit = Duration::from_secs(s.0.cfg.request_timeout_s);
     Ok(Json(s.0.pool.run(limit, move || me.0.store.put(Some(&name), &text, false)).await??))
@@ -564,9 +566,7 @@ async fn run_flow(
     s.0.metrics.cache.with_label_values(&["results", "miss"]).inc();
     let ctx = s.work_context()?;
     let limit = Duration::from_secs(s.0.cfg.request_timeout_s);
-    s.0.metrics.queue_depth.set(s.0.pool.depth() as i64 + 1);
     let outcome = s.0.pool.run(limit, move || f(&ctx)).await??;
-    s.0.metrics.queue_depth.set(s.0.pool.depth() as i64);
     s.0.metrics.observe_stages(&outcome.timings);
     let expires = ttl.map(|t| Instant::now() + t);
     let summary = summary(&id, flow, &outcome, ttl.map(|t| t.as_secs()));
@@ -734,14 +734,17 @@ async fn grade_scan(State(s): State<AppState>, headers: HeaderMap, req: Request)
     .await
 }
 
+fn stored_result(s: &AppState, id: &str) -> Result<Arc<Stored>, Problem> {
+    s.0.results.get(id).ok_or_else(|| Problem::not_found(format!("no result `{id}` (results expire)")))
+}
+
 async fn get_result(
     State(s): State<AppState>,
     headers: HeaderMap,
     Path(id): Path<String>,
 ) -> Result<Response, Problem> {
     check_key(&s, &headers, false)?;
-    let stored =
-        s.0.results.get(&id).ok_or_else(|| Problem::not_found(format!("no result `{id}` (results expire)")))?;
+    let stored = stored_result(&s, &id)?;
     Ok(answer(&stored, true))
 }
 
@@ -764,8 +767,7 @@ async fn get_result_artefact(
     Path((id, name)): Path<(String, String)>,
 ) -> Result<Response, Problem> {
     check_key(&s, &headers, false)?;
-    let stored =
-        s.0.results.get(&id).ok_or_else(|| Problem::not_found(format!("no result `{id}` (results expire)")))?;
+    let stored = stored_result(&s, &id)?;
     let a: &Artefact = stored
         .artefacts
         .iter()
@@ -954,9 +956,13 @@ fn run_job_work(s: &AppState, r: &JobRecord) -> Result<Outcome, Problem> {
     Ok(outcome)
 }
 
+fn job(s: &AppState, id: &str) -> Result<JobRecord, Problem> {
+    s.0.jobs.get(id)?.ok_or_else(|| Problem::not_found(format!("no job `{id}`")))
+}
+
 async fn get_job(State(s): State<AppState>, headers: HeaderMap, Path(id): Path<String>) -> Result<Response, Problem> {
     check_key(&s, &headers, false)?;
-    let r = s.0.jobs.get(&id)?.ok_or_else(|| Problem::not_found(format!("no job `{id}`")))?;
+    let r = job(&s, &id)?;
     Ok(Json(job_view(&s, &r)).into_response())
 }
 
@@ -966,7 +972,7 @@ async fn get_job_artefact(
     Path((id, name)): Path<(String, String)>,
 ) -> Result<Response, Problem> {
     check_key(&s, &headers, false)?;
-    let r = s.0.jobs.get(&id)?.ok_or_else(|| Problem::not_found(format!("no job `{id}`")))?;
+    let r = job(&s, &id)?;
     let entry = r
         .artefacts
         .iter()

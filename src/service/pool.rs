@@ -59,11 +59,6 @@ impl WorkPool {
         self.admitted.load(Ordering::Acquire)
     }
 
-    /// Work items waiting for a worker.
-    pub fn waiting(&self) -> usize {
-        self.depth().saturating_sub(self.opts.workers - self.permits.available_permits().min(self.opts.workers))
-    }
-
     /// Runs `f` on a blocking thread within the current tracing span.
     ///
     /// # Errors

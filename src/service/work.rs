@@ -199,7 +199,11 @@ struct Timer(BTreeMap<String, f64>);
 
 impl Timer {
     fn add(&mut self, stage: &str, since: Instant) {
-        *self.0.entry(stage.to_owned()).or_default() += since.elapsed().as_secs_f64() * 1e3;
+        self.add_ms(stage, since.elapsed().as_secs_f64() * 1e3);
+    }
+
+    fn add_ms(&mut self, stage: &str, ms: f64) {
+        *self.0.entry(stage.to_owned()).or_default() += ms;
     }
 }
 
@@ -271,9 +275,9 @@ fn grade_body(
             size: size.to_owned(),
             source,
         })?;
-        *timer.0.entry(stage::DECODE.into()).or_default() += g.timings.decode_ms;
-        *timer.0.entry(stage::REFINE.into()).or_default() += g.timings.refine_ms;
-        *timer.0.entry(stage::PATTERN.into()).or_default() += g.timings.pattern_ms;
+        timer.add_ms(stage::DECODE, g.timings.decode_ms);
+        timer.add_ms(stage::REFINE, g.timings.refine_ms);
+        timer.add_ms(stage::PATTERN, g.timings.pattern_ms);
         let start = Instant::now();
         let stem = format!("{}-{}", t.name, size);
         let pieces = &g.pattern.pieces;
@@ -403,6 +407,39 @@ fn graded_nest(
     Ok(())
 }
 
+/// The garment reports of one body; each template's pieces join its sizes.
+fn collect(
+    graded: Vec<(String, Graded, serde_json::Value)>,
+    size: &str,
+    per_template: &mut [Vec<(String, Vec<PatternPiece>)>],
+) -> Vec<serde_json::Value> {
+    graded
+        .into_iter()
+        .zip(per_template.iter_mut())
+        .map(|((name, g, fit), sizes)| {
+            let report = garment_report(&name, &g, fit);
+            sizes.push((size.to_owned(), g.pattern.pieces));
+            report
+        })
+        .collect()
+}
+
+/// [`graded_nest`] of every template, timed as export.
+fn graded_nests(
+    templates: &[Template],
+    per_template: &[Vec<(String, Vec<PatternPiece>)>],
+    base: &str,
+    timer: &mut Timer,
+    out: &mut Vec<Artefact>,
+) -> Result<(), WorkError> {
+    let start = Instant::now();
+    for (t, sizes) in templates.iter().zip(per_template) {
+        graded_nest(&t.name, sizes, base, out)?;
+    }
+    timer.add(stage::EXPORT, start);
+    Ok(())
+}
+
 fn finish(report: serde_json::Value, mut artefacts: Vec<Artefact>, timer: Timer) -> Outcome {
     let bytes = serde_json::to_vec_pretty(&report).unwrap_or_default();
     artefacts.push(Artefact { name: "report.json".into(), media_type: "application/json", bytes });
@@ -450,19 +487,11 @@ pub fn size_chart(
                 )
             })
             .collect();
-        let mut garments = Vec::new();
-        for (k, (name, g, fit)) in graded.into_iter().enumerate() {
-            garments.push(garment_report(&name, &g, fit));
-            per_template[k].push((row.size.clone(), g.pattern.pieces));
-        }
+        let garments = collect(graded, &row.size, &mut per_template);
         sizes.push(serde_json::json!({"size": row.size, "mannequin": {"residuals": residuals}, "garments": garments}));
     }
     progress(stage::EXPORT, total, total);
-    let start = Instant::now();
-    for (t, sizes) in templates.iter().zip(&per_template) {
-        graded_nest(&t.name, sizes, &base, &mut artefacts)?;
-    }
-    timer.add(stage::EXPORT, start);
+    graded_nests(templates, &per_template, &base, &mut timer, &mut artefacts)?;
     let report = serde_json::json!({
         "flow": "size-chart",
         "figure": chart.figure,
@@ -499,11 +528,7 @@ pub fn bodies(
         timer.add(stage::BODY, start);
         progress(stage::REFINE, done, total);
         let graded = grade_body(ctx, templates, &body, input.name, false, &mut timer, &mut artefacts)?;
-        let mut garments = Vec::new();
-        for (k, (name, g, fit)) in graded.into_iter().enumerate() {
-            garments.push(garment_report(&name, &g, fit));
-            per_template[k].push((input.name.to_owned(), g.pattern.pieces));
-        }
+        let garments = collect(graded, input.name, &mut per_template);
         let measurements: BTreeMap<&str, f64> =
             measure(&body, &MeasureOptions::default()).iter().map(|(id, v)| (id.as_str(), *v)).collect();
         reports.push(serde_json::json!({"body": input.name, "measurements_m": measurements, "garments": garments}));
@@ -514,11 +539,7 @@ pub fn bodies(
             Some(b) => return Err(WorkError::UnknownBaseSize(b.to_owned())),
             None => inputs[0].name.to_owned(),
         };
-        let start = Instant::now();
-        for (t, sizes) in templates.iter().zip(&per_template) {
-            graded_nest(&t.name, sizes, &base, &mut artefacts)?;
-        }
-        timer.add(stage::EXPORT, start);
+        graded_nests(templates, &per_template, &base, &mut timer, &mut artefacts)?;
     }
     progress(stage::EXPORT, total, total);
     let report = serde_json::json!({
