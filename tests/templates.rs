@@ -178,3 +178,44 @@ fn helper_skirt_simplifies_to_its_encoded_nodes() {
         deviation * 1e3
     );
 }
+
+/// Hangs (planted answer): after decoding, no hanging node lies inside the
+/// straight line between the nodes it hangs from and to, on any fixture body
+/// or ASTM size; and on the bodies with a belly the skirt's front hip node moved.
+#[test]
+fn hanging_nodes_never_sit_inside_their_line() {
+    use grade3d::geom::query::closest_point;
+    use grade3d::template::codec::HANG_SPAN;
+    let mut moved_total = 0usize;
+    for (name, mesh, lm) in fixture_bodies() {
+        let body = derive_features(mesh, &lm, &DeriveOptions::default()).unwrap();
+        for t in library() {
+            if t.hangs.is_empty() {
+                continue;
+            }
+            let hung = decode(t, &body, Relocation::Eq1Frame).unwrap();
+            let plain = decode(&Template { hangs: vec![], ..t.clone() }, &body, Relocation::Eq1Frame).unwrap();
+            for h in &t.hangs {
+                let [p, u, l] = [h.node, h.upper, h.lower].map(|v| hung.positions[v as usize]);
+                let chord = l - u;
+                let s = (p - u).dot(chord) / chord.length_squared();
+                if !(HANG_SPAN.0..=HANG_SPAN.1).contains(&s) {
+                    continue;
+                }
+                let out = p - closest_point(&body.mesh, p).point;
+                let inside = (u + chord * s - p).dot(out);
+                assert!(
+                    inside <= 1e-9 * chord.length_squared(),
+                    "{} on {name}: node {} inside its line",
+                    t.name,
+                    h.node
+                );
+                if plain.positions[h.node as usize].distance(p) > 1e-6 {
+                    moved_total += 1;
+                }
+            }
+        }
+    }
+    eprintln!("hanging nodes moved onto their line: {moved_total}");
+    assert!(moved_total > 0);
+}

@@ -1544,16 +1544,18 @@ impl Factor {
     }
 }
 
+/// Test surfaces shared by the pattern modules' tests (grids over the unit
+/// square mapped onto a cylinder, cone, sphere cap, saddle).
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use proptest::prelude::*;
+pub(crate) mod shapes {
+    use glam::{DVec2, DVec3};
 
-    type Panel = (Vec<DVec3>, Vec<[u32; 3]>);
+    /// Positions and triangles.
+    pub(crate) type Panel = (Vec<DVec3>, Vec<[u32; 3]>);
 
     /// A `rows × cols` grid over `(s, t) ∈ [0, 1]²` mapped by `f`, diagonals
     /// alternating; counter-clockwise in `(s, t)`.
-    fn grid(rows: usize, cols: usize, f: impl Fn(f64, f64) -> DVec3) -> Panel {
+    pub(crate) fn grid(rows: usize, cols: usize, f: impl Fn(f64, f64) -> DVec3) -> Panel {
         let mut p = Vec::new();
         for r in 0..=rows {
             for c in 0..=cols {
@@ -1577,7 +1579,7 @@ mod tests {
     }
 
     /// The unit square mapped onto the unit disc (elliptical grid mapping), then by `f`.
-    fn disc(res: usize, f: impl Fn(DVec2) -> DVec3) -> Panel {
+    pub(crate) fn disc(res: usize, f: impl Fn(DVec2) -> DVec3) -> Panel {
         grid(res, res, |s, t| {
             let (x, y) = (2.0 * s - 1.0, 2.0 * t - 1.0);
             f(DVec2::new(x * (1.0 - y * y / 2.0).sqrt(), y * (1.0 - x * x / 2.0).sqrt()))
@@ -1585,7 +1587,7 @@ mod tests {
     }
 
     /// Radius 0.15 m, 120°, height 0.4 m, 3,168 triangles; normals outward.
-    fn cylinder() -> Panel {
+    pub(crate) fn cylinder() -> Panel {
         grid(36, 44, |s, t| {
             let a = (s - 0.5) * 120f64.to_radians();
             DVec3::new(0.15 * a.sin(), 0.4 * t, 0.15 * a.cos())
@@ -1593,7 +1595,7 @@ mod tests {
     }
 
     /// A cone frustum: radius 0.25 → 0.15 m over 0.4 m of height, 100° around.
-    fn cone() -> Panel {
+    pub(crate) fn cone() -> Panel {
         grid(30, 40, |s, t| {
             let a = (s - 0.5) * 100f64.to_radians();
             let r = 0.25 - 0.1 * t;
@@ -1602,7 +1604,7 @@ mod tests {
     }
 
     /// A polar cap of a sphere of radius `r`, angular radius `deg` (aperture 2·deg).
-    fn cap(r: f64, deg: f64, res: usize) -> Panel {
+    pub(crate) fn cap(r: f64, deg: f64, res: usize) -> Panel {
         disc(res, |d| {
             let (th, phi) = (d.length() * deg.to_radians(), d.y.atan2(d.x));
             DVec3::new(th.sin() * phi.cos(), th.sin() * phi.sin(), th.cos()) * r
@@ -1611,12 +1613,19 @@ mod tests {
 
     /// A saddle 0.5 m across: curvature radii 0.3 m (convex, like around a
     /// hip) and 1 m (concave, like the waist's hollow).
-    fn saddle() -> Panel {
+    pub(crate) fn saddle() -> Panel {
         disc(30, |d| {
             let (x, y) = (0.25 * d.x, 0.25 * d.y);
             DVec3::new(x, y, x * x / (2.0 * 0.3) - y * y / (2.0 * 1.0))
         })
     }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::shapes::*;
+    use super::*;
+    use proptest::prelude::*;
 
     /// The boundary loop (vertices in order).
     fn boundary_loop(triangles: &[[u32; 3]]) -> Vec<u32> {

@@ -27,8 +27,9 @@ use super::assemble::{
     assemble, deviation_from_chord, polyline_length, polyline_length_3d, self_intersects, PieceError, PieceOptions,
     SeamReport,
 };
+use super::darts::{dart_opening, insert_darts, AutoDartOptions, FoundDart, Trial};
 use super::flatten::{distortion, flatten_with_seams, Distortion, FlattenError, FlattenOptions};
-use super::panels::{cut, PanelError};
+use super::panels::{cut, Panel, PanelError, SeamChain};
 use super::piece::PatternPiece;
 use crate::template::format::Template;
 
@@ -42,13 +43,21 @@ pub struct PatternOptions {
     pub flatten: FlattenOptions,
     /// A declared dart whose opening on this body is below this, or whose legs
     /// cross (the surface is saddle-shaped there and wants no dart), is left out
-    /// and the pattern made again without it, mm. Default 3.
+    /// and the pattern made again without it; also the least opening of a
+    /// dart found by [`super::darts`], mm. Default 3.
     pub min_dart_intake_mm: f64,
+    /// Darts added where a piece still strains ([`super::darts`]).
+    pub auto_darts: AutoDartOptions,
 }
 
 impl Default for PatternOptions {
     fn default() -> Self {
-        Self { piece: PieceOptions::default(), flatten: FlattenOptions::default(), min_dart_intake_mm: 3.0 }
+        Self {
+            piece: PieceOptions::default(),
+            flatten: FlattenOptions::default(),
+            min_dart_intake_mm: 3.0,
+            auto_darts: AutoDartOptions::default(),
+        }
     }
 }
 
@@ -107,6 +116,9 @@ pub struct PieceReport {
     pub sew_line_self_intersects: bool,
     /// Whether the cut line crosses itself.
     pub cut_line_self_intersects: bool,
+    /// Darts added where the piece strained ([`super::darts`]), in the order
+    /// found; empty when the declared darts sufficed.
+    pub found_darts: Vec<FoundDart>,
 }
 
 /// The pattern of one garment in one size.
@@ -143,7 +155,7 @@ pub fn pattern(
     let mut tt = t.clone();
     let mut left_out = Vec::new();
     loop {
-        let (mut g, darts) = pattern_once(&tt, positions, triangles, levels, size, opts)?;
+        let (mut g, darts) = pattern_once(&tt, positions, triangles, levels, size, opts, false)?;
         // the worst dart that does not open (or opens inverted) goes, and the pattern is made again
         let worst = darts
             .into_iter()
@@ -155,6 +167,11 @@ pub fn pattern(
                 left_out.push((name, opening));
             }
             None => {
+                // the declared darts are settled: darts where a piece still strains
+                let target = opts.auto_darts.target_strain_p95;
+                if opts.auto_darts.enabled && g.reports.iter().any(|r| r.distortion.strain_p95 > target) {
+                    g = pattern_once(&tt, positions, triangles, levels, size, opts, true)?.0;
+                }
                 g.darts_left_out = left_out;
                 return Ok(g);
             }
@@ -166,7 +183,20 @@ pub fn pattern(
 /// piece's sew line crosses itself.
 type DartCheck = (String, f64, bool);
 
-/// One pass of [`pattern`] with every declared dart; also each dart's signed
+/// This panel's seams (and darts) as chains of local ids, for
+/// [`flatten_with_seams`] to true to their 3D lengths so both sides agree.
+fn seam_chains(panel: &Panel, seams: &[SeamChain]) -> Vec<Vec<u32>> {
+    seams
+        .iter()
+        .filter(|s| s.panel_a == panel.index || s.panel_b == panel.index)
+        .filter_map(|s| panel.seam_runs(&s.chain))
+        .flatten()
+        .chain(panel.darts.iter().flat_map(|d| [d.a.clone(), d.b.clone()]))
+        .collect()
+}
+
+/// One pass of [`pattern`] with every declared dart (and, with `find_darts`,
+/// darts found where a piece strains); also each declared dart's signed
 /// opening (mm, negative when inverted) and whether its piece's sew line crosses itself.
 fn pattern_once(
     t: &Template,
@@ -175,22 +205,40 @@ fn pattern_once(
     levels: usize,
     size: &str,
     opts: &PatternOptions,
+    find_darts: bool,
 ) -> Result<(GarmentPattern, Vec<DartCheck>), PatternError> {
-    let (panels, seams, lineage) = cut(t, positions, triangles, levels)?;
+    let (mut panels, seams, lineage) = cut(t, positions, triangles, levels)?;
     let mut pieces = Vec::with_capacity(panels.len());
     let mut placed = Vec::with_capacity(panels.len());
     let mut reports = Vec::with_capacity(panels.len());
-    for panel in &panels {
-        // this panel's seams, in local ids: trued to their 3D lengths so both sides agree
-        let chains: Vec<Vec<u32>> = seams
-            .iter()
-            .filter(|s| s.panel_a == panel.index || s.panel_b == panel.index)
-            .filter_map(|s| s.chain.iter().map(|&g| panel.local(g)).collect::<Option<Vec<u32>>>())
-            .chain(panel.darts.iter().flat_map(|d| [d.a.clone(), d.b.clone()]))
-            .collect();
-        let flat = flatten_with_seams(&panel.positions, &panel.triangles, &chains, &opts.flatten)
+    let n_nodes = t.nodes.len() as u32;
+    for panel in panels.iter_mut() {
+        let flat = flatten_with_seams(&panel.positions, &panel.triangles, &seam_chains(panel, &seams), &opts.flatten)
             .map_err(|source| PatternError::Flatten { panel: panel.name.clone(), source })?;
         let d = distortion(&panel.positions, &panel.triangles, &flat.uv);
+        let mut found_darts = Vec::new();
+        let (flat, d) = if find_darts && opts.auto_darts.enabled && d.strain_p95 > opts.auto_darts.target_strain_p95 {
+            let first = Trial { flat, distortion: d };
+            let global = panel.global.clone();
+            let (found_panel, best, found) = insert_darts(
+                panel,
+                first,
+                |v| global.get(v as usize).is_some_and(|&g| g < n_nodes),
+                opts.min_dart_intake_mm * 1e-3,
+                &opts.auto_darts,
+                |p| {
+                    let flat =
+                        flatten_with_seams(&p.positions, &p.triangles, &seam_chains(p, &seams), &opts.flatten).ok()?;
+                    Some(Trial { distortion: distortion(&p.positions, &p.triangles, &flat.uv), flat })
+                },
+            );
+            *panel = found_panel;
+            found_darts = found;
+            (best.flat, best.distortion)
+        } else {
+            (flat, d)
+        };
+        let panel = &*panel;
         let p = assemble(t, panel, &seams, &lineage, &flat.uv, size, &opts.piece)?;
         let area_3d_mm2 = panel
             .triangles
@@ -213,6 +261,7 @@ fn pattern_once(
             waist_deviation_mm: waist_deviation(t, panel, &p.piece),
             sew_line_self_intersects: self_intersects(&p.piece.sew_line),
             cut_line_self_intersects: self_intersects(&p.piece.cut_line),
+            found_darts,
         });
         pieces.push(p.piece.clone());
         placed.push(p);
@@ -220,18 +269,27 @@ fn pattern_once(
     let seam_reports = seams
         .iter()
         .map(|s| {
-            let side = |pi: usize| -> Vec<DVec2> {
-                let panel = &panels[pi];
-                s.chain.iter().filter_map(|&g| panel.local(g)).map(|l| placed[pi].uv_mm[l as usize]).collect()
+            // sewn length from the seam's start to each of its vertices (a dart
+            // opening on the seam is closed: the edges either side of its mouth
+            // end on the mouth's two copies)
+            let side = |pi: usize| -> Vec<f64> {
+                let uv = &placed[pi].uv_mm;
+                let edges = panels[pi].seam_edges(&s.chain).unwrap_or_default();
+                std::iter::once(0.0)
+                    .chain(edges.iter().scan(0.0, |sum, [u, w]| {
+                        *sum += uv[*u as usize].distance(uv[*w as usize]);
+                        Some(*sum)
+                    }))
+                    .collect()
             };
             let (a, b) = (side(s.panel_a), side(s.panel_b));
             let chain_3d: Vec<DVec3> = s.chain.iter().map(|&g| positions[g as usize]).collect();
-            let (la, lb) = (polyline_length(&a), polyline_length(&b));
+            let (la, lb) = (a.last().copied().unwrap_or(0.0), b.last().copied().unwrap_or(0.0));
             let notch_mismatch_mm = t
                 .notches
                 .iter()
                 .filter_map(|n| s.chain.iter().position(|&g| g == n.node))
-                .map(|k| (polyline_length(&a[..=k]) - polyline_length(&b[..=k])).abs())
+                .filter_map(|k| Some((a.get(k)? - b.get(k)?).abs()))
                 .fold(0.0, f64::max);
             SeamReport {
                 name: s.name.clone(),
@@ -266,19 +324,10 @@ fn pattern_once(
     let mut darts = Vec::new();
     for (pi, panel) in panels.iter().enumerate() {
         let rim = panel.rim();
-        let n = rim.len();
-        let at = |l: u32| placed[pi].uv_mm[l as usize];
         for d in &panel.darts {
-            let (Some(i), Some(j)) = (rim.iter().position(|&v| v == d.a[0]), rim.iter().position(|&v| v == d.b[0]))
-            else {
-                continue;
-            };
-            // the bridge x → y runs along the sew line: inverted if it points back
-            let (x, y) = if (i + 1) % n == j { (i, j) } else { (j, i) };
-            let (w, z) = (rim[(x + n - 1) % n], rim[(y + 1) % n]);
-            let bridge = at(rim[y]) - at(rim[x]);
-            let sign = if bridge.dot(at(z) - at(w)) < 0.0 { -1.0 } else { 1.0 };
-            darts.push((d.name.clone(), sign * bridge.length(), reports[pi].sew_line_self_intersects));
+            if let Some(opening) = dart_opening(&rim, &placed[pi].uv_mm, d) {
+                darts.push((d.name.clone(), opening, reports[pi].sew_line_self_intersects));
+            }
         }
     }
     let g = GarmentPattern {

@@ -5,6 +5,7 @@
 //! ([`export`]).
 
 pub mod assemble;
+pub mod darts;
 pub mod export;
 pub mod flatten;
 pub mod garment;

@@ -182,6 +182,64 @@ impl Panel {
 }
 
 impl Panel {
+    /// Slits the panel open along `chain` (local ids, from a vertex on the
+    /// outline to an interior apex) and records it as the dart `name`: the
+    /// vertices of the chain but the apex are duplicated, the faces on the
+    /// left of the chain take the duplicates, and the outline is found again
+    /// (it now runs down one leg and up the other). Used for darts found
+    /// where the flattening strains most ([`super::darts`]).
+    ///
+    /// # Errors
+    /// Why the chain cannot be slit (its first edge is not in the panel, it
+    /// does not start on the outline, or the panel would stop being a disc);
+    /// the panel is left unchanged then.
+    pub fn add_dart(&mut self, name: &str, chain: &[u32]) -> Result<(), String> {
+        let mut triangles = self.triangles.clone();
+        let mut global = self.global.clone();
+        let legs = slit(&mut triangles, &mut global, chain)?;
+        let outline = disc_outline(&triangles, &global)
+            .map_err(|loops| format!("the slit leaves {loops} boundary loops, not one"))?;
+        for &v in &chain[..chain.len() - 1] {
+            self.positions.push(self.positions[v as usize]);
+        }
+        self.triangles = triangles;
+        self.global = global;
+        self.outline = outline;
+        self.darts.push(DartLegs { name: name.to_string(), a: chain.to_vec(), b: legs });
+        Ok(())
+    }
+
+    /// A seam's fine chain (global ids) as directed edges of this panel's
+    /// outline, in local ids, one per consecutive pair; `None` if a pair is
+    /// not an outline edge. Where a dart opens on the seam, the edges either
+    /// side of its mouth end on the two copies of the mouth vertex.
+    pub fn seam_edges(&self, chain: &[u32]) -> Option<Vec<[u32; 2]>> {
+        let n = self.outline.len();
+        let mut by_pair: HashMap<(u32, u32), [u32; 2]> = HashMap::with_capacity(2 * n);
+        for k in 0..n {
+            let (u, w) = (self.outline[k], self.outline[(k + 1) % n]);
+            let (gu, gw) = (self.global[u as usize], self.global[w as usize]);
+            by_pair.entry((gu, gw)).or_insert([u, w]);
+            by_pair.entry((gw, gu)).or_insert([w, u]);
+        }
+        chain.windows(2).map(|p| by_pair.get(&(p[0], p[1])).copied()).collect()
+    }
+
+    /// A seam's fine chain as runs of local ids along the outline: one run,
+    /// or one more for each dart opening on the seam (module docs of
+    /// [`super::darts`]); `None` if the seam is not on this panel's outline.
+    pub fn seam_runs(&self, chain: &[u32]) -> Option<Vec<Vec<u32>>> {
+        let edges = self.seam_edges(chain)?;
+        let mut runs: Vec<Vec<u32>> = Vec::new();
+        for [u, w] in edges {
+            match runs.last_mut() {
+                Some(run) if run.last() == Some(&u) => run.push(w),
+                _ => runs.push(vec![u, w]),
+            }
+        }
+        Some(runs)
+    }
+
     /// The outline with every dart closed: the legs' vertices (all but the two
     /// openings) left out, so the line runs straight across each dart's opening.
     /// This is the sew line; the legs are drawn as internal lines.
@@ -268,15 +326,8 @@ pub fn cut(
                 .map_err(|reason| PanelError::BadDart { dart: d.name.clone(), reason })?;
             darts.push(DartLegs { name: d.name.clone(), a: chain, b: legs });
         }
-        let loops = boundary_loops(&local_tris);
-        if loops.len() != 1 {
-            return Err(PanelError::NotADisc { panel: p.name.clone(), loops: loops.len() });
-        }
-        let mut outline = loops.into_iter().next().unwrap_or_default();
-        // start at the smallest template node on the loop (deterministic)
-        if let Some(start) = (0..outline.len()).min_by_key(|&k| global[outline[k] as usize]) {
-            outline.rotate_left(start);
-        }
+        let outline = disc_outline(&local_tris, &global)
+            .map_err(|loops| PanelError::NotADisc { panel: p.name.clone(), loops })?;
         let positions = global.iter().map(|&g| positions[g as usize]).collect();
         panels.push(Panel {
             name: p.name.clone(),
@@ -381,6 +432,21 @@ fn slit(triangles: &mut [[u32; 3]], global: &mut Vec<u32>, chain: &[u32]) -> Res
         }
     }
     Ok((0..k as u32).map(|i| first_dup + i).chain(std::iter::once(chain[k])).collect())
+}
+
+/// The one boundary loop of a panel's triangles, started at its smallest
+/// fine vertex id (a template node: deterministic); the number of loops when
+/// there is not exactly one.
+pub(crate) fn disc_outline(triangles: &[[u32; 3]], global: &[u32]) -> Result<Vec<u32>, usize> {
+    let loops = boundary_loops(triangles);
+    if loops.len() != 1 {
+        return Err(loops.len());
+    }
+    let mut outline = loops.into_iter().next().unwrap_or_default();
+    if let Some(start) = (0..outline.len()).min_by_key(|&k| global[outline[k] as usize]) {
+        outline.rotate_left(start);
+    }
+    Ok(outline)
 }
 
 /// The fine chain of a seam's coarse edges, oriented so consecutive edges meet.

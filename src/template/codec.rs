@@ -25,7 +25,7 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use super::format::{
-    Dart, Edge, Face, GradingDefaults, GrainLine, Node, Notch, Panel, Relocation, Seam, Template, TemplateError,
+    Dart, Edge, Face, GradingDefaults, GrainLine, Hang, Node, Notch, Panel, Relocation, Seam, Template, TemplateError,
     SCHEMA_ID, SCHEMA_VERSION,
 };
 use super::profile::{Profile, ProfileError};
@@ -120,12 +120,31 @@ pub struct Draft {
     pub notches: Vec<(String, u32)>,
     /// Darts `(name, panel, nodes from the outline to the apex)`.
     pub darts: Vec<(String, String, Vec<u32>)>,
+    /// Nodes that hang straight between two others.
+    pub hangs: Vec<Hang>,
     /// Default grading options.
     pub defaults: GradingDefaults,
 }
 
 /// Encodes a draft on its reference body into a template.
+///
+/// The draft's hangs are applied on the reference body first (nodes moved,
+/// the profiles of their edges relocated by Eq. (5)), so that decoding on
+/// the reference body reproduces the stored nodes.
 pub fn encode(draft: &Draft, body: &FeatureBody) -> Result<Template, CodecError> {
+    let mut hung = draft.clone();
+    let moved = hang(&draft.hangs, body, &mut hung.positions);
+    if !moved.is_empty() {
+        for ((a, b), pts) in &mut hung.profiles {
+            if moved.contains(a) || moved.contains(b) {
+                let profile = Profile::new(pts.clone())
+                    .and_then(|p| p.relocated(hung.positions[*a as usize], hung.positions[*b as usize]))
+                    .map_err(|e| CodecError::Draft(format!("profile {a}–{b} of a hanging node: {e}")))?;
+                *pts = profile.points().to_vec();
+            }
+        }
+    }
+    let draft = &hung;
     let mut nodes = Vec::with_capacity(draft.positions.len());
     for (i, &p) in draft.positions.iter().enumerate() {
         let node = i as u32;
@@ -235,10 +254,50 @@ pub fn encode(draft: &Draft, body: &FeatureBody) -> Result<Template, CodecError>
         seams,
         notches: draft.notches.iter().map(|(n, v)| Notch { name: n.clone(), node: *v }).collect(),
         darts,
+        hangs: draft.hangs.clone(),
         defaults: draft.defaults.clone(),
     };
     t.validate()?;
     Ok(t)
+}
+
+/// Moves each hanging node ([`Hang`]), in order, to the point of the line
+/// `upper → lower` nearest to it, `u + s (l − u)` with
+/// `s = (p − u)·(l − u) / |l − u|²` (only for `s` in [`HANG_SPAN`]), when that point lies further
+/// from the body than the node: `(straight − p)·(p − c) > 0`, `c` the body
+/// point closest to `p`. Rotation- and translation-covariant (no world axis).
+/// Returns the nodes moved.
+/// The part of a hang's line a node may move to, as fractions of the line
+/// from its upper node: a node beyond it is not hanging between the two.
+pub const HANG_SPAN: (f64, f64) = (0.05, 0.95);
+
+fn hang(hangs: &[Hang], body: &FeatureBody, positions: &mut [DVec3]) -> Vec<u32> {
+    let mut moved = Vec::new();
+    for h in hangs {
+        let (Some(&p), Some(&u), Some(&l)) =
+            (positions.get(h.node as usize), positions.get(h.upper as usize), positions.get(h.lower as usize))
+        else {
+            continue;
+        };
+        let chord = l - u;
+        let len2 = chord.length_squared();
+        if len2 <= f64::EPSILON {
+            continue;
+        }
+        let s = (p - u).dot(chord) / len2;
+        // a node that is not between the two (a misplaced decode) is left alone
+        if !(HANG_SPAN.0..=HANG_SPAN.1).contains(&s) {
+            continue;
+        }
+        let straight = u + chord * s;
+        let out = p - crate::geom::query::closest_point(&body.mesh, p).point;
+        // a relative floor keeps a node already on its line (the authoring body) in place
+        if (straight - p).dot(out) > 1e-9 * len2 {
+            positions[h.node as usize] = straight;
+            moved.push(h.node);
+        }
+    }
+    moved
 }
 
 /// The coarse garment mesh `M0` of a template on a body.
@@ -264,6 +323,7 @@ pub fn decode(t: &Template, body: &FeatureBody, relocation: Relocation) -> Resul
         };
         positions.push(p);
     }
+    hang(&t.hangs, body, &mut positions);
     let triangles = (0..t.faces.len()).map(|f| t.face_nodes(f)).collect();
     let mut profiles = Vec::with_capacity(t.edges.len());
     for (i, e) in t.edges.iter().enumerate() {

@@ -139,6 +139,24 @@ pub struct Dart {
     pub edges: Vec<u32>,
 }
 
+/// A node that hangs straight between two others: cloth falls in a straight
+/// line from a girth to the next one below, bridging a narrower girth
+/// between (a skirt from a belly over the hip, a trouser leg from the thigh
+/// past the knee) unless held in. After relocation, if the point of the
+/// segment `upper → lower` at the node's height lies further from the body
+/// than the node (along the node's offset from its closest body point), the
+/// node moves there; the profiles of its edges follow by Eq. (5).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Hang {
+    /// The node that may move.
+    pub node: u32,
+    /// The node it hangs from.
+    pub upper: u32,
+    /// The node its line runs to.
+    pub lower: u32,
+}
+
 /// Which relocation equation a decode uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -207,6 +225,9 @@ pub struct Template {
     /// Darts.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub darts: Vec<Dart>,
+    /// Nodes that hang straight between two others (applied in order).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub hangs: Vec<Hang>,
     /// Default grading options.
     #[serde(default)]
     pub defaults: GradingDefaults,
@@ -501,6 +522,15 @@ impl Template {
                 return Err(bad(format!("edge {e} does not exist")));
             }
         }
+        for h in &self.hangs {
+            let ids = [h.node, h.upper, h.lower];
+            if ids.iter().any(|&v| v as usize >= self.nodes.len()) || h.node == h.upper || h.node == h.lower {
+                return Err(TemplateError::BadReference {
+                    element: format!("hang of node {}", h.node),
+                    reason: "needs three distinct existing nodes".into(),
+                });
+            }
+        }
         for s in &self.seams {
             for side in [&s.panel_a, &s.panel_b] {
                 if !names.contains(side.as_str()) {
@@ -579,6 +609,7 @@ mod tests {
             seams: vec![],
             notches: vec![],
             darts: vec![],
+            hangs: vec![],
             defaults: GradingDefaults::default(),
         }
     }

@@ -19,7 +19,7 @@ use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
 use super::codec::{encode, CodecError, Draft, DraftPanel, DraftSeam};
-use super::format::{Template, TemplateError};
+use super::format::{Hang, Template, TemplateError};
 use crate::body::derive::{derive_features, DeriveOptions, FeatureError};
 use crate::body::feature::FeatureBody;
 use crate::body::vocab::{CurveId, PointId};
@@ -217,6 +217,67 @@ impl<'a> Builder<'a> {
         Ok(())
     }
 
+    /// Every node of `ring` hangs straight between the same-index nodes of
+    /// `upper` and `lower` ([`Hang`]).
+    fn hang(&mut self, ring: &Ring, upper: &Ring, lower: &Ring) {
+        for ((&node, &up), &low) in ring.nodes.iter().zip(&upper.nodes).zip(&lower.nodes) {
+            self.draft.hangs.push(Hang { node, upper: up, lower: low });
+        }
+    }
+
+    /// [`Self::line_profile`] along the line bridged as a tape (or cloth)
+    /// pressed on it from outside bridges it: between the points nearest
+    /// the nodes, the line is replaced by its convex hull on the side away
+    /// from `interior`, in the plane of the line's chord and the vertical
+    /// (a crotch seam does not follow the body into the groove between the
+    /// thighs, a back seam does not follow the gluteal cleft).
+    fn bridged_line_profile(&mut self, a: u32, b: u32, line: CurveId, interior: DVec3) -> Result<(), AuthorError> {
+        let poly = self.curve(line)?.clone();
+        let (pa, pb) = (self.draft.positions[a as usize], self.draft.positions[b as usize]);
+        let (Some(ca), Some(cb)) = (poly.closest(pa), poly.closest(pb)) else {
+            return Err(AuthorError::Missing(format!("{line} near nodes {a}–{b}")));
+        };
+        let samples = 64;
+        let pts: Vec<DVec3> =
+            (0..=samples).map(|k| poly.point_at(ca.s + (cb.s - ca.s) * k as f64 / samples as f64)).collect();
+        let (first, last) = (pts[0], pts[samples]);
+        let u = (last - first).normalize_or_zero();
+        let mut n = u.cross(DVec3::Y.cross(u)).normalize_or_zero();
+        if n.length_squared() == 0.0 {
+            n = DVec3::Z;
+        }
+        if n.dot(interior - (first + last) / 2.0) > 0.0 {
+            n = -n;
+        }
+        // the outer hull chain: monotone in the chord direction, turning one way only
+        let mut chain: Vec<DVec3> = Vec::new();
+        for p in pts {
+            let key = |q: DVec3| DVec2::new((q - first).dot(u), (q - first).dot(n));
+            while chain.len() >= 2 {
+                let (o, m) = (key(chain[chain.len() - 2]), key(chain[chain.len() - 1]));
+                // drop the middle point while it lies on or inside the line o → p
+                if (m - o).perp_dot(key(p) - o) >= 0.0 {
+                    chain.pop();
+                } else {
+                    break;
+                }
+            }
+            chain.push(p);
+        }
+        let bridged = Polyline::new(chain, false);
+        let (oa, ob) = (pa - ca.point, pb - cb.point);
+        let total = bridged.length();
+        let m = self.profile_points;
+        let profile = (0..m)
+            .map(|k| {
+                let t = k as f64 / (m - 1) as f64;
+                bridged.point_at(total * t) + oa.lerp(ob, t)
+            })
+            .collect();
+        self.draft.profiles.push(((a, b), profile));
+        Ok(())
+    }
+
     fn tri(&mut self, a: u32, b: u32, c: u32) -> usize {
         self.draft.triangles.push([a, b, c]);
         self.draft.triangles.len() - 1
@@ -386,6 +447,9 @@ pub fn straight_skirt(body: &FeatureBody, o: &SkirtOptions) -> Result<Template, 
         b.draft.profiles.push(((hem_nodes[i], hem_nodes[j]), pts));
     }
     let hem = Ring { nodes: hem_nodes, ..hip.clone() };
+    // on a body whose waist stands further out than its hip (a belly), the skirt
+    // hangs straight from the waist past the hip
+    b.hang(&hip, &waist, &hem);
     let upper = b.band(&waist, &hip);
     let lower = b.band(&hip, &hem);
     for (col, line) in
@@ -591,7 +655,10 @@ pub struct TrouserOptions {
     pub hip_ease_mm: f64,
     /// Thigh ease, mm. Default 70.
     pub thigh_ease_mm: f64,
-    /// Knee ease, mm. Default 110.
+    /// Least knee ease, mm: the leg hangs straight from the thigh to the hem
+    /// (the knee nodes on the straight lines between), and the knee nodes are
+    /// moved out to this ease over the knee girth only where those lines pass
+    /// closer. Default 60.
     pub knee_ease_mm: f64,
     /// Hem ease over the ankle girth, mm. Default 200.
     pub hem_ease_mm: f64,
@@ -607,7 +674,7 @@ impl Default for TrouserOptions {
             waist_ease_mm: 10.0,
             hip_ease_mm: 50.0,
             thigh_ease_mm: 70.0,
-            knee_ease_mm: 110.0,
+            knee_ease_mm: 60.0,
             hem_ease_mm: 200.0,
             crotch_drop_mm: 15.0,
             profile_points: 7,
@@ -647,6 +714,7 @@ pub fn trousers(body: &FeatureBody, o: &TrouserOptions) -> Result<Template, Auth
         let t = b.ring(thigh.0, &thigh.1, o.thigh_ease_mm)?;
         let k = b.ring(knee.0, &knee.1, o.knee_ease_mm)?;
         let a = b.ring(ankle.0, &ankle.1, o.hem_ease_mm)?;
+        b.hang(&k, &t, &a);
         // ring order from the outer point: left leg outer, back, inner, front; right leg outer, front, inner, back
         let (to, ti) = (t.nodes[0], t.nodes[2]);
         let (tf, tb) = if side == 0 { (t.nodes[3], t.nodes[1]) } else { (t.nodes[1], t.nodes[3]) };
@@ -684,10 +752,12 @@ pub fn trousers(body: &FeatureBody, o: &TrouserOptions) -> Result<Template, Auth
         panels.insert(name_b, bk);
         legs.push((t, k, a, to, ti, tf));
     }
+    // the crotch seams bridge the groove between the thighs and the gluteal cleft
+    let interior = hip.curve.centroid();
     b.line_profile(waist.nodes[0], h[0], CurveId::CentreFront)?;
-    b.line_profile(h[0], c, CurveId::CentreFront)?;
+    b.bridged_line_profile(h[0], c, CurveId::CentreFront, interior)?;
     b.line_profile(waist.nodes[4], h[4], CurveId::CentreBack)?;
-    b.line_profile(h[4], c, CurveId::CentreBack)?;
+    b.bridged_line_profile(h[4], c, CurveId::CentreBack, interior)?;
     b.orient();
     for (side, (_, k, a, _, _, _)) in legs.iter().enumerate() {
         let (nf, nb) = if side == 0 { ("left_front", "left_back") } else { ("right_front", "right_back") };

@@ -1,0 +1,447 @@
+//! Darts where the flattening strains most: greedy, distortion-driven cut
+//! insertion.
+//!
+//! # Method
+//!
+//! A doubly curved panel cannot be laid flat at true length; a pattern maker
+//! takes the excess out in darts, placed where the distortion gathers (the
+//! cutting lines of the energy-model flattening, Wang, Smith & Yuen 2002,
+//! seed 000 ref. [6]; boundary cuts as a topological operator that makes a
+//! surface flattenable, Kwok, Wang et al. 2015, DOI 10.1115/1.4031023).
+//! Given a panel and its flattening, one round of [`insert_darts`]:
+//!
+//! 1. measures the strain of every vertex, `s(v) = mean |ℓ′/ℓ − 1|` over its
+//!    edges (`ℓ` the 3D length, `ℓ′` the 2D one);
+//! 2. takes the [`AutoDartOptions::candidates`] most strained interior
+//!    vertices, each at least one ring away from an earlier candidate's path,
+//!    as apexes, and joins each to the outline by its shortest path along mesh
+//!    edges (Dijkstra on 3D edge lengths) through interior vertices that are
+//!    not template nodes, ending on an outline vertex that may open (not a
+//!    template node, not on a dart already there);
+//! 3. slits the panel along each path ([`Panel::add_dart`]), flattens it again
+//!    (the caller's flattening, which sews the new legs to equal length) and
+//!    keeps the candidate with the lowest 95th-percentile strain, provided
+//!    the flattening has no flipped triangle, the sew line (darts closed)
+//!    does not cross itself, every dart opens by at least the intake the
+//!    caller asks for — a cut that wants to overlap marks a saddle, where a
+//!    dart cannot help — and the 95th percentile drops by at least
+//!    [`AutoDartOptions::min_gain`].
+//!
+//! Rounds repeat until the piece meets [`AutoDartOptions::target_strain_p95`],
+//! holds [`AutoDartOptions::max_darts`] found darts, or no candidate helps.
+//!
+//! # Contract
+//!
+//! Pure: data in, data out; the flattening is the caller's closure, so this
+//! module knows nothing of seams or options beyond its own. A candidate
+//! whose slit or flattening fails is skipped, never an error. The result is
+//! the panel (with its new darts), its flattening and what each dart did; when
+//! nothing helps it is the input unchanged. Deterministic: ties break on
+//! vertex ids.
+
+use std::cmp::Ordering;
+use std::collections::{BinaryHeap, HashSet};
+
+use glam::{DVec2, DVec3};
+use serde::{Deserialize, Serialize};
+
+use super::assemble::self_intersects;
+use super::flatten::{Distortion, Flattening};
+use super::panels::{DartLegs, Panel};
+
+/// Knobs of the dart search.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct AutoDartOptions {
+    /// Search at all. Default true.
+    pub enabled: bool,
+    /// A piece whose 95th-percentile edge strain is at or below this gets no
+    /// dart, and the search stops once a piece reaches it (fraction). Default 0.025.
+    pub target_strain_p95: f64,
+    /// Most darts added to one piece (count). Default 6.
+    pub max_darts: usize,
+    /// Apexes tried per dart (count; each costs one flattening). Default 16.
+    pub candidates: usize,
+    /// Least drop of the 95th-percentile strain that earns a dart (fraction). Default 0.002.
+    pub min_gain: f64,
+    /// Shortest dart, along its legs, mm. Default 20.
+    pub min_length_mm: f64,
+}
+
+impl Default for AutoDartOptions {
+    fn default() -> Self {
+        Self {
+            enabled: true,
+            target_strain_p95: 0.025,
+            max_darts: 6,
+            candidates: 16,
+            min_gain: 0.002,
+            min_length_mm: 20.0,
+        }
+    }
+}
+
+/// A flattening and its distortion.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Trial {
+    /// The flattening (2D positions in metres).
+    pub flat: Flattening,
+    /// Its distortion.
+    pub distortion: Distortion,
+}
+
+/// What one found dart did.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FoundDart {
+    /// Dart name.
+    pub name: String,
+    /// Length of its legs in 3D, mm.
+    pub length_mm: f64,
+    /// Its opening on the outline, mm.
+    pub intake_mm: f64,
+    /// 95th-percentile strain of the piece before it (fraction).
+    pub strain_p95_before: f64,
+    /// And with it (fraction).
+    pub strain_p95_after: f64,
+    /// Apex, 3D, metres (where the strain gathered).
+    pub apex: DVec3,
+}
+
+/// Signed opening of a dart in a flattening, in the units of `uv`: the gap
+/// between its two mouths on the sew line, negative when the legs cross (the
+/// bridge from the first mouth to the second points against the sew line's
+/// run). `None` when a mouth is not on the rim.
+pub fn dart_opening(rim: &[u32], uv: &[DVec2], dart: &DartLegs) -> Option<f64> {
+    let n = rim.len();
+    let (Some(i), Some(j)) = (rim.iter().position(|&v| v == dart.a[0]), rim.iter().position(|&v| v == dart.b[0]))
+    else {
+        return None;
+    };
+    let at = |l: u32| uv.get(l as usize).copied();
+    // the bridge x → y runs along the sew line: inverted if it points back
+    let (x, y) = if (i + 1) % n == j { (i, j) } else { (j, i) };
+    let (w, z) = (rim[(x + n - 1) % n], rim[(y + 1) % n]);
+    let bridge = at(rim[y])? - at(rim[x])?;
+    let sign = if bridge.dot(at(z)? - at(w)?) < 0.0 { -1.0 } else { 1.0 };
+    Some(sign * bridge.length())
+}
+
+/// Strain of every vertex: the mean `|ℓ′/ℓ − 1|` over its edges (module docs, step 1).
+pub fn vertex_strain(positions: &[DVec3], triangles: &[[u32; 3]], uv: &[DVec2]) -> Vec<f64> {
+    let mut sum = vec![0.0; positions.len()];
+    let mut count = vec![0u32; positions.len()];
+    for f in triangles {
+        for k in 0..3 {
+            let (a, b) = (f[k] as usize, f[(k + 1) % 3] as usize);
+            let l3 = positions[a].distance(positions[b]);
+            if l3 <= 0.0 {
+                continue;
+            }
+            let s = (uv[a].distance(uv[b]) / l3 - 1.0).abs();
+            for v in [a, b] {
+                sum[v] += s;
+                count[v] += 1;
+            }
+        }
+    }
+    sum.iter().zip(&count).map(|(&s, &c)| if c > 0 { s / f64::from(c) } else { 0.0 }).collect()
+}
+
+/// Inserts darts into `panel` where its flattening `first` strains most
+/// (module docs). `is_node(v)` says whether local vertex `v` is a template
+/// node (never cut through, never a mouth); `min_intake` is the least
+/// opening a dart must have, in metres; `flatten` flattens a candidate panel.
+pub fn insert_darts(
+    panel: &Panel,
+    first: Trial,
+    is_node: impl Fn(u32) -> bool,
+    min_intake: f64,
+    opts: &AutoDartOptions,
+    mut flatten: impl FnMut(&Panel) -> Option<Trial>,
+) -> (Panel, Trial, Vec<FoundDart>) {
+    let mut panel = panel.clone();
+    let mut best = first;
+    let mut found = Vec::new();
+    if !opts.enabled {
+        return (panel, best, found);
+    }
+    while found.len() < opts.max_darts && best.distortion.strain_p95 > opts.target_strain_p95 {
+        let before = best.distortion.strain_p95;
+        let name = format!("dart_auto_{}_{}", panel.name, found.len() + 1);
+        let mut winner: Option<(Panel, Trial, Vec<u32>, f64)> = None;
+        for path in candidate_paths(&panel, &best.flat.uv, &is_node, opts) {
+            let mut trial_panel = panel.clone();
+            if trial_panel.add_dart(&name, &path).is_err() {
+                continue;
+            }
+            let Some(trial) = flatten(&trial_panel) else { continue };
+            let acc = acceptable(&trial_panel, &trial, min_intake);
+            let Some(intake) = acc else { continue };
+            let p95 = trial.distortion.strain_p95;
+            if p95 <= before - opts.min_gain && winner.as_ref().is_none_or(|w| p95 < w.1.distortion.strain_p95) {
+                winner = Some((trial_panel, trial, path, intake));
+            }
+        }
+        let Some((next, trial, path, intake)) = winner else { break };
+        let length: f64 =
+            path.windows(2).map(|w| next.positions[w[0] as usize].distance(next.positions[w[1] as usize])).sum();
+        found.push(FoundDart {
+            name,
+            length_mm: length * 1e3,
+            intake_mm: intake * 1e3,
+            strain_p95_before: before,
+            strain_p95_after: trial.distortion.strain_p95,
+            apex: next.positions[path[path.len() - 1] as usize],
+        });
+        panel = next;
+        best = trial;
+    }
+    (panel, best, found)
+}
+
+/// The candidate's smallest dart opening, if the flattening is acceptable
+/// (no flips, the sew line does not cross itself, every dart opens by
+/// `min_intake`).
+fn acceptable(panel: &Panel, trial: &Trial, min_intake: f64) -> Option<f64> {
+    if trial.distortion.flipped > 0 {
+        return None;
+    }
+    let rim = panel.rim();
+    let uv = &trial.flat.uv;
+    let sew: Vec<DVec2> = rim.iter().map(|&l| uv[l as usize]).collect();
+    if self_intersects(&sew) {
+        return None;
+    }
+    let mut least = f64::INFINITY;
+    for d in &panel.darts {
+        let opening = dart_opening(&rim, uv, d)?;
+        if opening < min_intake {
+            return None;
+        }
+        least = least.min(opening);
+    }
+    Some(least)
+}
+
+/// Dijkstra queue entry: distance, vertex (smallest first).
+#[derive(PartialEq)]
+struct Entry(f64, u32);
+
+impl Eq for Entry {}
+
+impl PartialOrd for Entry {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for Entry {
+    fn cmp(&self, other: &Self) -> Ordering {
+        other.0.total_cmp(&self.0).then_with(|| other.1.cmp(&self.1))
+    }
+}
+
+/// The paths of one round (module docs, step 2): each from an outline
+/// vertex that may open to an apex, as local ids.
+fn candidate_paths(
+    panel: &Panel,
+    uv: &[DVec2],
+    is_node: &impl Fn(u32) -> bool,
+    opts: &AutoDartOptions,
+) -> Vec<Vec<u32>> {
+    let n = panel.positions.len();
+    let mut adjacency: Vec<Vec<u32>> = vec![Vec::new(); n];
+    for f in &panel.triangles {
+        for k in 0..3 {
+            let (a, b) = (f[k], f[(k + 1) % 3]);
+            adjacency[a as usize].push(b);
+            adjacency[b as usize].push(a);
+        }
+    }
+    for list in &mut adjacency {
+        list.sort_unstable();
+        list.dedup();
+    }
+    let on_outline: HashSet<u32> = panel.outline.iter().copied().collect();
+    let on_dart: HashSet<u32> = panel.darts.iter().flat_map(|d| d.a.iter().chain(&d.b).copied()).collect();
+    let strain = vertex_strain(&panel.positions, &panel.triangles, uv);
+    let mut order: Vec<u32> = (0..n as u32).filter(|v| !on_outline.contains(v) && !is_node(*v)).collect();
+    order.sort_by(|&a, &b| strain[b as usize].total_cmp(&strain[a as usize]).then(a.cmp(&b)));
+    let mut taken: HashSet<u32> = HashSet::new();
+    let mut paths = Vec::new();
+    for apex in order {
+        if paths.len() >= opts.candidates {
+            break;
+        }
+        if taken.contains(&apex) {
+            continue;
+        }
+        let Some(path) = shortest_to_outline(panel, &adjacency, apex, &on_outline, &on_dart, is_node) else {
+            continue;
+        };
+        for &v in &path {
+            taken.insert(v);
+            taken.extend(adjacency[v as usize].iter().copied());
+        }
+        let length: f64 =
+            path.windows(2).map(|w| panel.positions[w[0] as usize].distance(panel.positions[w[1] as usize])).sum();
+        if path.len() >= 3 && length * 1e3 >= opts.min_length_mm {
+            paths.push(path);
+        }
+    }
+    paths
+}
+
+/// Shortest path along edges from `apex` to an outline vertex that may open,
+/// through interior vertices that are not template nodes; mouth first.
+fn shortest_to_outline(
+    panel: &Panel,
+    adjacency: &[Vec<u32>],
+    apex: u32,
+    on_outline: &HashSet<u32>,
+    on_dart: &HashSet<u32>,
+    is_node: &impl Fn(u32) -> bool,
+) -> Option<Vec<u32>> {
+    let n = adjacency.len();
+    let mut dist = vec![f64::INFINITY; n];
+    let mut prev = vec![u32::MAX; n];
+    dist[apex as usize] = 0.0;
+    let mut heap = BinaryHeap::from([Entry(0.0, apex)]);
+    while let Some(Entry(d, u)) = heap.pop() {
+        if d > dist[u as usize] {
+            continue;
+        }
+        if on_outline.contains(&u) {
+            let mut path = vec![u];
+            while let Some(&last) = path.last() {
+                if last == apex {
+                    break;
+                }
+                path.push(prev[last as usize]);
+            }
+            return Some(path);
+        }
+        for &v in &adjacency[u as usize] {
+            if is_node(v) || on_dart.contains(&v) {
+                continue;
+            }
+            let nd = d + panel.positions[u as usize].distance(panel.positions[v as usize]);
+            if nd < dist[v as usize] {
+                dist[v as usize] = nd;
+                prev[v as usize] = u;
+                heap.push(Entry(nd, v));
+            }
+        }
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pattern::flatten::shapes::{cap, cylinder, saddle};
+    use crate::pattern::flatten::{distortion, flatten_with_seams, FlattenOptions};
+    use crate::pattern::panels::disc_outline;
+
+    fn panel((positions, triangles): (Vec<DVec3>, Vec<[u32; 3]>)) -> Panel {
+        let n = positions.len();
+        let global: Vec<u32> = (0..n as u32).collect();
+        let outline = disc_outline(&triangles, &global).expect("a disc");
+        Panel { name: "p".into(), index: 0, global, unique: n, darts: vec![], positions, triangles, outline }
+    }
+
+    fn flat(p: &Panel) -> Option<Trial> {
+        let legs: Vec<Vec<u32>> = p.darts.iter().flat_map(|d| [d.a.clone(), d.b.clone()]).collect();
+        let flat = flatten_with_seams(&p.positions, &p.triangles, &legs, &FlattenOptions::default()).ok()?;
+        Some(Trial { distortion: distortion(&p.positions, &p.triangles, &flat.uv), flat })
+    }
+
+    fn run(p: &Panel) -> (Panel, Trial, Vec<FoundDart>) {
+        let first = flat(p).expect("flattens");
+        insert_darts(p, first, |_| false, 3e-3, &AutoDartOptions::default(), flat)
+    }
+
+    #[test]
+    fn a_developable_panel_gets_no_dart() {
+        let p = panel(cylinder());
+        let (out, best, found) = run(&p);
+        assert!(found.is_empty());
+        assert_eq!(out, p);
+        assert!(best.distortion.strain_p95 < 1e-6);
+    }
+
+    #[test]
+    fn a_sphere_cap_opens_darts_that_lower_the_strain() {
+        // 60° aperture on a 0.3 m sphere: p95 strain ≈ 2.9 % flattened whole
+        let p = panel(cap(0.3, 30.0, 24));
+        let before = flat(&p).unwrap().distortion.strain_p95;
+        let (out, best, found) = run(&p);
+        eprintln!("cap: p95 {before:.4} → {:.4} with {} darts: {found:?}", best.distortion.strain_p95, found.len());
+        assert!(before > 0.025, "{before}");
+        assert!(!found.is_empty());
+        assert_eq!(out.darts.len(), found.len());
+        assert!(best.distortion.strain_p95 < before - 0.002 * found.len() as f64, "{before} → {best:?}");
+        assert_eq!(best.distortion.flipped, 0);
+        let rim = out.rim();
+        for (d, f) in out.darts.iter().zip(&found) {
+            // every dart opens, its legs are sewn to equal length, and it was reported so
+            let opening = dart_opening(&rim, &best.flat.uv, d).unwrap();
+            assert!(opening >= 3e-3, "{}: {opening}", d.name);
+            let leg = |ids: &[u32]| -> f64 {
+                ids.windows(2).map(|w| best.flat.uv[w[0] as usize].distance(best.flat.uv[w[1] as usize])).sum()
+            };
+            assert!((leg(&d.a) - leg(&d.b)).abs() < 1e-6, "{}", d.name);
+            assert!(f.intake_mm >= 3.0 && f.length_mm >= 20.0, "{f:?}");
+            assert!(f.strain_p95_after < f.strain_p95_before);
+        }
+        for w in found.windows(2) {
+            assert!(w[1].strain_p95_after < w[0].strain_p95_after);
+        }
+    }
+
+    #[test]
+    fn a_saddle_gets_no_dart_because_every_cut_would_overlap() {
+        let p = panel(saddle());
+        let first = flat(&p).unwrap();
+        let p95 = first.distortion.strain_p95;
+        let opts = AutoDartOptions { target_strain_p95: 0.0, ..AutoDartOptions::default() };
+        let (out, best, found) = insert_darts(&p, first, |_| false, 3e-3, &opts, flat);
+        assert!(found.is_empty(), "{found:?}");
+        assert_eq!(out.darts.len(), 0);
+        assert_eq!(best.distortion.strain_p95, p95);
+    }
+
+    #[test]
+    fn nodes_are_never_cut_through_and_disabled_means_untouched() {
+        let p = panel(cap(0.3, 30.0, 24));
+        let first = flat(&p).unwrap();
+        // every vertex a template node: no path exists
+        let (_, _, found) = insert_darts(&p, first.clone(), |_| true, 3e-3, &AutoDartOptions::default(), flat);
+        assert!(found.is_empty());
+        let off = AutoDartOptions { enabled: false, ..AutoDartOptions::default() };
+        let (out, _, found) = insert_darts(&p, first, |_| false, 3e-3, &off, flat);
+        assert!(found.is_empty());
+        assert_eq!(out, p);
+    }
+
+    #[test]
+    fn a_seam_through_a_dart_mouth_runs_in_two_pieces() {
+        let mut p = panel(cap(0.3, 30.0, 12));
+        let first = flat(&p).unwrap();
+        let paths = candidate_paths(&p, &first.flat.uv, &|_| false, &AutoDartOptions::default());
+        let path = paths.first().expect("a candidate").clone();
+        let mouth = path[0];
+        let k = p.outline.iter().position(|&v| v == mouth).unwrap();
+        let n = p.outline.len();
+        let seam: Vec<u32> = (0..5).map(|i| p.outline[(k + n - 2 + i) % n]).collect();
+        assert_eq!(p.seam_runs(&seam).unwrap().len(), 1);
+        p.add_dart("d", &path).unwrap();
+        let runs = p.seam_runs(&seam).unwrap();
+        assert_eq!(runs.len(), 2, "{runs:?}");
+        assert_eq!(runs[0].len() + runs[1].len(), 6);
+        // one run ends on the mouth, the other starts on its copy
+        let copies = [p.darts[0].a[0], p.darts[0].b[0]];
+        assert!(copies.contains(&runs[0][runs[0].len() - 1]) && copies.contains(&runs[1][0]));
+        assert_ne!(runs[0][runs[0].len() - 1], runs[1][0]);
+    }
+}
