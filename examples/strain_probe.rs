@@ -3,6 +3,8 @@
 //! print each piece's p95 edge strain, |E_s| and strain hotspot.
 //!
 //! `cargo run --release --example strain_probe -- trousers '{"thigh_ease_mm":90}'`
+//! (`AUTO='{"candidates":8}'` overrides the found-dart search's options;
+//! `[n]` after a piece is how many darts the search added).
 
 use std::path::Path;
 
@@ -48,36 +50,17 @@ fn main() {
             let body = derive_features(mesh, &lm, &DeriveOptions::default()).unwrap();
             let maps = gpu.render(&body.mesh, &RenderOptions::default()).unwrap();
             let obstacle = Obstacle { maps, tree: WindingTree::new(&body.mesh, &WindingOptions::default()) };
-            let obs = if std::env::var_os("NO_COLLIDE").is_some() { None } else { Some(&obstacle) };
             let mut go = GradeOptions::default();
             if let Ok(a) = std::env::var("AUTO") {
                 go.pattern.auto_darts = serde_json::from_str(&a).unwrap();
             }
-            let g = match grade(&t, &body, obs, &name, &go) {
+            let g = match grade(&t, &body, Some(&obstacle), &name, &go) {
                 Ok(g) => g,
                 Err(e) => {
                     println!("{name}: ERROR {e}");
                     continue;
                 }
             };
-            if let Ok(dir) = std::env::var("DUMP") {
-                let mut out = String::new();
-                for p in &g.mesh.positions {
-                    out += &format!("v {} {} {}\n", p.x, p.y, p.z);
-                }
-                for f in &g.mesh.triangles {
-                    out += &format!("f {} {} {}\n", f[0] + 1, f[1] + 1, f[2] + 1);
-                }
-                std::fs::write(format!("{dir}/{name}-garment.obj"), out).unwrap();
-                let mut out = String::new();
-                for p in body.mesh.positions() {
-                    out += &format!("v {} {} {}\n", p.x, p.y, p.z);
-                }
-                for f in body.mesh.triangles() {
-                    out += &format!("f {} {} {}\n", f[0].0 + 1, f[1].0 + 1, f[2].0 + 1);
-                }
-                std::fs::write(format!("{dir}/{name}-body.obj"), out).unwrap();
-            }
             let mut line = format!("{name:40}");
             for r in &g.pattern.reports {
                 let d = &r.distortion;

@@ -45,7 +45,7 @@ use std::collections::{BinaryHeap, HashSet};
 use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
-use super::assemble::self_intersects;
+use super::assemble::{polyline_length_3d, self_intersects};
 use super::flatten::{Distortion, Flattening};
 use super::panels::{DartLegs, Panel};
 
@@ -153,14 +153,14 @@ pub fn vertex_strain(positions: &[DVec3], triangles: &[[u32; 3]], uv: &[DVec2]) 
 }
 
 /// Inserts darts into `panel` where its flattening `first` strains most
-/// (module docs). `is_node(v)` says whether local vertex `v` is a template
-/// node (never cut through, never a mouth); `min_intake` is the least
+/// (module docs). Vertices whose fine id is below `n_nodes` are template
+/// nodes (never cut through, never a mouth); `min_intake` is the least
 /// opening a dart must have, in metres; `flatten` flattens a candidate panel
 /// (called from several threads at once when [`AutoDartOptions::threads`] > 1).
 pub fn insert_darts(
     panel: &Panel,
     first: Trial,
-    is_node: impl Fn(u32) -> bool,
+    n_nodes: u32,
     min_intake: f64,
     opts: &AutoDartOptions,
     flatten: impl Fn(&Panel) -> Option<Trial> + Sync,
@@ -174,7 +174,7 @@ pub fn insert_darts(
     while found.len() < opts.max_darts && best.distortion.strain_p95 > opts.target_strain_p95 {
         let before = best.distortion.strain_p95;
         let name = format!("dart_auto_{}_{}", panel.name, found.len() + 1);
-        let paths = candidate_paths(&panel, &best.flat.uv, &is_node, opts);
+        let paths = candidate_paths(&panel, &best.flat.uv, n_nodes, opts);
         let try_one = |path: &Vec<u32>| -> Option<(Panel, Trial, f64)> {
             let mut trial_panel = panel.clone();
             trial_panel.add_dart(&name, path).ok()?;
@@ -206,11 +206,9 @@ pub fn insert_darts(
             }
         }
         let Some((next, trial, path, intake)) = winner else { break };
-        let length: f64 =
-            path.windows(2).map(|w| next.positions[w[0] as usize].distance(next.positions[w[1] as usize])).sum();
         found.push(FoundDart {
             name,
-            length_mm: length * 1e3,
+            length_mm: path_length(&next, &path) * 1e3,
             intake_mm: intake * 1e3,
             strain_p95_before: before,
             strain_p95_after: trial.distortion.strain_p95,
@@ -266,12 +264,9 @@ impl Ord for Entry {
 
 /// The paths of one round (module docs, step 2): each from an outline
 /// vertex that may open to an apex, as local ids.
-fn candidate_paths(
-    panel: &Panel,
-    uv: &[DVec2],
-    is_node: &impl Fn(u32) -> bool,
-    opts: &AutoDartOptions,
-) -> Vec<Vec<u32>> {
+fn candidate_paths(panel: &Panel, uv: &[DVec2], n_nodes: u32, opts: &AutoDartOptions) -> Vec<Vec<u32>> {
+    // a template node on the panel being searched (dart copies included)
+    let is_node = |v: u32| panel.global.get(v as usize).is_some_and(|&g| g < n_nodes);
     let n = panel.positions.len();
     let mut adjacency: Vec<Vec<u32>> = vec![Vec::new(); n];
     for f in &panel.triangles {
@@ -299,20 +294,24 @@ fn candidate_paths(
         if taken.contains(&apex) {
             continue;
         }
-        let Some(path) = shortest_to_outline(panel, &adjacency, apex, &on_outline, &on_dart, is_node) else {
+        let Some(path) = shortest_to_outline(panel, &adjacency, apex, &on_outline, &on_dart, &is_node) else {
             continue;
         };
         for &v in &path {
             taken.insert(v);
             taken.extend(adjacency[v as usize].iter().copied());
         }
-        let length: f64 =
-            path.windows(2).map(|w| panel.positions[w[0] as usize].distance(panel.positions[w[1] as usize])).sum();
-        if path.len() >= 3 && length * 1e3 >= opts.min_length_mm {
+        if path.len() >= 3 && path_length(panel, &path) * 1e3 >= opts.min_length_mm {
             paths.push(path);
         }
     }
     paths
+}
+
+/// 3D length of a path of local vertex ids, metres.
+fn path_length(panel: &Panel, path: &[u32]) -> f64 {
+    let points: Vec<DVec3> = path.iter().map(|&v| panel.positions[v as usize]).collect();
+    polyline_length_3d(&points)
 }
 
 /// Shortest path along edges from `apex` to an outline vertex that may open,
@@ -381,7 +380,7 @@ mod tests {
 
     fn run(p: &Panel) -> (Panel, Trial, Vec<FoundDart>) {
         let first = flat(p).expect("flattens");
-        insert_darts(p, first, |_| false, 3e-3, &AutoDartOptions::default(), flat)
+        insert_darts(p, first, 0, 3e-3, &AutoDartOptions::default(), flat)
     }
 
     #[test]
@@ -428,7 +427,7 @@ mod tests {
         let first = flat(&p).unwrap();
         let p95 = first.distortion.strain_p95;
         let opts = AutoDartOptions { target_strain_p95: 0.0, ..AutoDartOptions::default() };
-        let (out, best, found) = insert_darts(&p, first, |_| false, 3e-3, &opts, flat);
+        let (out, best, found) = insert_darts(&p, first, 0, 3e-3, &opts, flat);
         assert!(found.is_empty(), "{found:?}");
         assert_eq!(out.darts.len(), 0);
         assert_eq!(best.distortion.strain_p95, p95);
@@ -439,10 +438,10 @@ mod tests {
         let p = panel(cap(0.3, 30.0, 24));
         let first = flat(&p).unwrap();
         // every vertex a template node: no path exists
-        let (_, _, found) = insert_darts(&p, first.clone(), |_| true, 3e-3, &AutoDartOptions::default(), flat);
+        let (_, _, found) = insert_darts(&p, first.clone(), u32::MAX, 3e-3, &AutoDartOptions::default(), flat);
         assert!(found.is_empty());
         let off = AutoDartOptions { enabled: false, ..AutoDartOptions::default() };
-        let (out, _, found) = insert_darts(&p, first, |_| false, 3e-3, &off, flat);
+        let (out, _, found) = insert_darts(&p, first, 0, 3e-3, &off, flat);
         assert!(found.is_empty());
         assert_eq!(out, p);
     }
@@ -451,7 +450,7 @@ mod tests {
     fn a_seam_through_a_dart_mouth_runs_in_two_pieces() {
         let mut p = panel(cap(0.3, 30.0, 12));
         let first = flat(&p).unwrap();
-        let paths = candidate_paths(&p, &first.flat.uv, &|_| false, &AutoDartOptions::default());
+        let paths = candidate_paths(&p, &first.flat.uv, 0, &AutoDartOptions::default());
         let path = paths.first().expect("a candidate").clone();
         let mouth = path[0];
         let k = p.outline.iter().position(|&v| v == mouth).unwrap();

@@ -217,21 +217,15 @@ fn pattern_once(
             .map_err(|source| PatternError::Flatten { panel: panel.name.clone(), source })?;
         let d = distortion(&panel.positions, &panel.triangles, &flat.uv);
         let mut found_darts = Vec::new();
-        let (flat, d) = if find_darts && opts.auto_darts.enabled && d.strain_p95 > opts.auto_darts.target_strain_p95 {
+        // `find_darts` is asked for only when the search is enabled ([`pattern`])
+        let (flat, d) = if find_darts && d.strain_p95 > opts.auto_darts.target_strain_p95 {
             let first = Trial { flat, distortion: d };
-            let global = panel.global.clone();
-            let (found_panel, best, found) = insert_darts(
-                panel,
-                first,
-                |v| global.get(v as usize).is_some_and(|&g| g < n_nodes),
-                opts.min_dart_intake_mm * 1e-3,
-                &opts.auto_darts,
-                |p| {
+            let (found_panel, best, found) =
+                insert_darts(panel, first, n_nodes, opts.min_dart_intake_mm * 1e-3, &opts.auto_darts, |p| {
                     let flat =
                         flatten_with_seams(&p.positions, &p.triangles, &seam_chains(p, &seams), &opts.flatten).ok()?;
                     Some(Trial { distortion: distortion(&p.positions, &p.triangles, &flat.uv), flat })
-                },
-            );
+                });
             *panel = found_panel;
             found_darts = found;
             (best.flat, best.distortion)

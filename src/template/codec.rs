@@ -261,16 +261,16 @@ pub fn encode(draft: &Draft, body: &FeatureBody) -> Result<Template, CodecError>
     Ok(t)
 }
 
+/// The part of a hang's line a node may move to, as fractions of the line
+/// from its upper node: a node beyond it is not hanging between the two.
+pub const HANG_SPAN: (f64, f64) = (0.05, 0.95);
+
 /// Moves each hanging node ([`Hang`]), in order, to the point of the line
 /// `upper → lower` nearest to it, `u + s (l − u)` with
 /// `s = (p − u)·(l − u) / |l − u|²` (only for `s` in [`HANG_SPAN`]), when that point lies further
 /// from the body than the node: `(straight − p)·(p − c) > 0`, `c` the body
 /// point closest to `p`. Rotation- and translation-covariant (no world axis).
 /// Returns the nodes moved.
-/// The part of a hang's line a node may move to, as fractions of the line
-/// from its upper node: a node beyond it is not hanging between the two.
-pub const HANG_SPAN: (f64, f64) = (0.05, 0.95);
-
 fn hang(hangs: &[Hang], body: &FeatureBody, positions: &mut [DVec3]) -> Vec<u32> {
     let mut moved = Vec::new();
     for h in hangs {

@@ -200,21 +200,7 @@ impl<'a> Builder<'a> {
     /// sampled between the line's points nearest to them and moved outward
     /// along the body normal by the nodes' own distance from the body.
     fn line_profile(&mut self, a: u32, b: u32, line: CurveId) -> Result<(), AuthorError> {
-        let poly = self.curve(line)?.clone();
-        let (pa, pb) = (self.draft.positions[a as usize], self.draft.positions[b as usize]);
-        let (Some(ca), Some(cb)) = (poly.closest(pa), poly.closest(pb)) else {
-            return Err(AuthorError::Missing(format!("{line} near nodes {a}–{b}")));
-        };
-        let (oa, ob) = (pa - ca.point, pb - cb.point);
-        let n = self.profile_points;
-        let pts = (0..n)
-            .map(|k| {
-                let t = k as f64 / (n - 1) as f64;
-                poly.point_at(ca.s + (cb.s - ca.s) * t) + oa.lerp(ob, t)
-            })
-            .collect();
-        self.draft.profiles.push(((a, b), pts));
-        Ok(())
+        self.profile_along(a, b, line, None)
     }
 
     /// Every node of `ring` hangs straight between the same-index nodes of
@@ -232,49 +218,35 @@ impl<'a> Builder<'a> {
     /// (a crotch seam does not follow the body into the groove between the
     /// thighs, a back seam does not follow the gluteal cleft).
     fn bridged_line_profile(&mut self, a: u32, b: u32, line: CurveId, interior: DVec3) -> Result<(), AuthorError> {
+        self.profile_along(a, b, line, Some(interior))
+    }
+
+    /// The profile of [`Self::line_profile`], its line bridged away from
+    /// `bridge_from` when given ([`Self::bridged_line_profile`]).
+    fn profile_along(&mut self, a: u32, b: u32, line: CurveId, bridge_from: Option<DVec3>) -> Result<(), AuthorError> {
         let poly = self.curve(line)?.clone();
         let (pa, pb) = (self.draft.positions[a as usize], self.draft.positions[b as usize]);
         let (Some(ca), Some(cb)) = (poly.closest(pa), poly.closest(pb)) else {
             return Err(AuthorError::Missing(format!("{line} near nodes {a}–{b}")));
         };
-        let samples = 64;
-        let pts: Vec<DVec3> =
-            (0..=samples).map(|k| poly.point_at(ca.s + (cb.s - ca.s) * k as f64 / samples as f64)).collect();
-        let (first, last) = (pts[0], pts[samples]);
-        let u = (last - first).normalize_or_zero();
-        let mut n = u.cross(DVec3::Y.cross(u)).normalize_or_zero();
-        if n.length_squared() == 0.0 {
-            n = DVec3::Z;
-        }
-        if n.dot(interior - (first + last) / 2.0) > 0.0 {
-            n = -n;
-        }
-        // the outer hull chain: monotone in the chord direction, turning one way only
-        let mut chain: Vec<DVec3> = Vec::new();
-        for p in pts {
-            let key = |q: DVec3| DVec2::new((q - first).dot(u), (q - first).dot(n));
-            while chain.len() >= 2 {
-                let (o, m) = (key(chain[chain.len() - 2]), key(chain[chain.len() - 1]));
-                // drop the middle point while it lies on or inside the line o → p
-                if (m - o).perp_dot(key(p) - o) >= 0.0 {
-                    chain.pop();
-                } else {
-                    break;
-                }
+        // the path from the point nearest `a` to the point nearest `b`, and its arc-length span
+        let (path, s0, s1) = match bridge_from {
+            None => (poly, ca.s, cb.s),
+            Some(interior) => {
+                let hull = outer_hull(&poly, ca.s, cb.s, interior);
+                let total = hull.length();
+                (hull, 0.0, total)
             }
-            chain.push(p);
-        }
-        let bridged = Polyline::new(chain, false);
+        };
         let (oa, ob) = (pa - ca.point, pb - cb.point);
-        let total = bridged.length();
-        let m = self.profile_points;
-        let profile = (0..m)
+        let n = self.profile_points;
+        let pts = (0..n)
             .map(|k| {
-                let t = k as f64 / (m - 1) as f64;
-                bridged.point_at(total * t) + oa.lerp(ob, t)
+                let t = k as f64 / (n - 1) as f64;
+                path.point_at(s0 + (s1 - s0) * t) + oa.lerp(ob, t)
             })
             .collect();
-        self.draft.profiles.push(((a, b), profile));
+        self.draft.profiles.push(((a, b), pts));
         Ok(())
     }
 
@@ -362,6 +334,37 @@ impl<'a> Builder<'a> {
     fn seam(&mut self, name: &str, a: &str, b: &str, nodes: Vec<u32>) {
         self.draft.seams.push(DraftSeam { name: name.into(), panel_a: a.into(), panel_b: b.into(), nodes });
     }
+}
+
+/// Arc `s0 → s1` of `line` (64 samples) replaced by its convex hull on the
+/// side away from `interior`, in the plane of the arc's chord and the
+/// vertical: a monotone chain along the chord, turning one way only.
+fn outer_hull(line: &Polyline, s0: f64, s1: f64, interior: DVec3) -> Polyline {
+    const SAMPLES: usize = 64;
+    let pts: Vec<DVec3> = (0..=SAMPLES).map(|k| line.point_at(s0 + (s1 - s0) * k as f64 / SAMPLES as f64)).collect();
+    let (first, last) = (pts[0], pts[SAMPLES]);
+    let u = (last - first).normalize_or_zero();
+    let mut n = u.cross(DVec3::Y.cross(u)).normalize_or_zero();
+    if n.length_squared() == 0.0 {
+        n = DVec3::Z;
+    }
+    if n.dot(interior - (first + last) / 2.0) > 0.0 {
+        n = -n;
+    }
+    let key = |q: DVec3| DVec2::new((q - first).dot(u), (q - first).dot(n));
+    let mut chain: Vec<DVec3> = Vec::new();
+    for p in pts {
+        // drop the last point while it lies on or inside the line from the one before to p
+        while let [.., o, m] = chain[..] {
+            if (key(m) - key(o)).perp_dot(key(p) - key(o)) >= 0.0 {
+                chain.pop();
+            } else {
+                break;
+            }
+        }
+        chain.push(p);
+    }
+    Polyline::new(chain, false)
 }
 
 /// A point of a girth at arc length `s`, moved outwards horizontally (away
