@@ -104,9 +104,11 @@ pub struct FoundDart {
     pub length_mm: f64,
     /// Its opening on the outline, mm.
     pub intake_mm: f64,
-    /// 95th-percentile strain of the piece before it (fraction).
+    /// 95th-percentile strain of the piece before it (fraction), in the
+    /// search's flattening (with the seams free when they are negotiated
+    /// afterwards, [`super::garment`]).
     pub strain_p95_before: f64,
-    /// And with it (fraction).
+    /// And with it (fraction), in the same flattening.
     pub strain_p95_after: f64,
     /// Apex, 3D, metres (where the strain gathered).
     pub apex: DVec3,

@@ -15,6 +15,9 @@
 //! counter-clockwise where the input triangles are counter-clockwise seen
 //! from the side their normals point to. [`flatten_with_seams`] holds only the named
 //! seam chains exact and lets the rest of the boundary (hems) relax;
+//! [`flatten_with_sewn_lengths`] holds them at given ratios `ℓ′/ℓ` of their
+//! 3D lengths instead (the negotiated seams of [`super::garment`]): every
+//! `ℓ_ij` below is then the held length `ratio · ℓ_ij`;
 //! [`lscm`] is the start alone; [`distortion`] measures any flattening.
 //!
 //! # Method
@@ -304,6 +307,16 @@ pub enum FlattenError {
         /// The vertex.
         vertex: u32,
     },
+    /// A sewn-length ratio ([`flatten_with_sewn_lengths`]) is not finite and positive.
+    #[error("seam chain {seam}, edge {edge}: sewn-length ratio {ratio} is not finite and positive")]
+    SewnRatio {
+        /// The chain (index into the caller's list).
+        seam: u32,
+        /// The edge of the chain.
+        edge: u32,
+        /// The ratio given.
+        ratio: f64,
+    },
     /// An option is out of its range: a real one negative or not finite,
     /// or [`FlattenOptions::anderson_depth`] above [`MAX_ANDERSON_DEPTH`].
     #[error("option {field} is out of range")]
@@ -420,27 +433,55 @@ pub fn flatten_with_seams(
     seams: &[Vec<u32>],
     opts: &FlattenOptions,
 ) -> Result<Flattening, FlattenError> {
+    flatten_with_sewn_lengths(positions, triangles, seams, &[], opts)
+}
+
+/// [`flatten_with_seams`] with the seams held at lengths other than their
+/// 3D ones: `sewn[k][i]` (when given) is the ratio `ℓ′/ℓ` that the `i`-th
+/// edge of chain `k` (from `seams[k][i]` to `seams[k][i + 1]`) is held at,
+/// `ℓ` its 3D length; missing entries are 1. Two panels flattened with the
+/// same ratios on a shared chain sew up edge for edge.
+///
+/// # Errors
+/// As [`flatten_with_seams`]; also [`FlattenError::SewnRatio`].
+pub fn flatten_with_sewn_lengths(
+    positions: &[DVec3],
+    triangles: &[[u32; 3]],
+    seams: &[Vec<u32>],
+    sewn: &[Vec<f64>],
+    opts: &FlattenOptions,
+) -> Result<Flattening, FlattenError> {
     opts.validate()?;
-    let mesh = Mesh::new(positions, triangles, opts.degenerate_area)?;
+    let mut mesh = Mesh::new(positions, triangles, opts.degenerate_area)?;
     let mut chain_edges = Vec::new();
     for (k, chain) in seams.iter().enumerate() {
         let local = |v: u32| match mesh.compact.get(v as usize) {
             Some(&c) if c != u32::MAX => Ok(c),
             _ => Err(FlattenError::SeamVertex { seam: k as u32, vertex: v }),
         };
-        for pair in chain.windows(2) {
-            chain_edges.push(edge_key(local(pair[0])?, local(pair[1])?));
+        for (i, pair) in chain.windows(2).enumerate() {
+            let ratio = sewn.get(k).and_then(|r| r.get(i)).copied().unwrap_or(1.0);
+            if !(ratio.is_finite() && ratio > 0.0) {
+                return Err(FlattenError::SewnRatio { seam: k as u32, edge: i as u32, ratio });
+            }
+            chain_edges.push((edge_key(local(pair[0])?, local(pair[1])?), ratio));
         }
         if let [v] = chain[..] {
             local(v)?;
         }
     }
-    chain_edges.sort_unstable();
+    chain_edges.sort_unstable_by_key(|a| a.0);
+    let find = |e: &[u32; 2]| chain_edges.binary_search_by(|c| c.0.cmp(&edge_key(e[0], e[1]))).ok();
     let seam: Vec<bool> = if seams.is_empty() {
         vec![true; mesh.boundary.len()]
     } else {
-        mesh.boundary.iter().map(|e| chain_edges.binary_search(&edge_key(e[0], e[1])).is_ok()).collect()
+        mesh.boundary.iter().map(|e| find(e).is_some()).collect()
     };
+    for k in 0..mesh.boundary.len() {
+        if let Some(at) = find(&mesh.boundary[k]) {
+            mesh.boundary_length[k] *= chain_edges[at].1;
+        }
+    }
     let sparse = Sparse::new(&mesh)?;
     let (start, pins) = mesh.lscm(&sparse, opts.pin_tie, opts.pin_search_limit)?;
     let arap = mesh.arap(&sparse, &start, pins[0], &seam, opts)?;

@@ -3,6 +3,24 @@
 //! start, ARAP local/global on a once-factored sparse Cholesky), assemble
 //! pattern pieces ([`super::assemble`]) and measure them.
 //!
+//! # Negotiated seams
+//!
+//! A seam is sewn from two pieces, so both sides must have the same length,
+//! but nothing asks that length to be the 3D one: a pattern maker lets a
+//! bias crotch seam take the length the cloth wants. Holding every seam at
+//! its 3D length forces the curvature's strain into the piece (trousers
+//! front on the male-average fixture: p95 6.4 % held, 4.1 % with its seams
+//! free). So ([`PatternOptions::negotiate_seams`]) every panel is first
+//! flattened with its seams free (soft springs only, like hems; dart legs
+//! held equal), each seam edge's ratio `ℓ′/ℓ` is averaged over the two
+//! panels it borders, and every panel is flattened again with its seam edges
+//! held at `ratio · ℓ` ([`flatten_with_sewn_lengths`]). Both sides of a seam
+//! then have the same length edge for edge (mismatch and notch mismatch at
+//! the solver's tolerance), and the edge strain counts the seams' own
+//! stretch like any edge's. Darts are searched ([`super::darts`]) with the
+//! seams free and before the negotiation, so that the seams are negotiated
+//! between the darted panels.
+//!
 //! # Figures (per piece, [`PieceReport`])
 //! * area accuracy `E_s = (A − A′)/A` and length accuracy `E_c = (L − L′)/L`
 //!   (Wang, Smith & Yuen 2002), edge-length strain `|l′/l − 1|` mean, 95th
@@ -20,15 +38,17 @@
 //! **Failure modes** — [`PatternError`], wrapping the stage's error with
 //! the panel it concerns.
 
+use std::collections::BTreeMap;
+
 use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
 use super::assemble::{
     assemble, deviation_from_chord, polyline_length, polyline_length_3d, self_intersects, PieceError, PieceOptions,
-    SeamReport,
+    PlacedPanel, SeamReport,
 };
 use super::darts::{dart_opening, insert_darts, AutoDartOptions, FoundDart, Trial};
-use super::flatten::{distortion, flatten_with_seams, Distortion, FlattenError, FlattenOptions};
+use super::flatten::{distortion, flatten_with_sewn_lengths, Distortion, FlattenError, FlattenOptions, Flattening};
 use super::panels::{cut, Panel, PanelError, SeamChain};
 use super::piece::PatternPiece;
 use crate::template::format::Template;
@@ -48,6 +68,9 @@ pub struct PatternOptions {
     pub min_dart_intake_mm: f64,
     /// Darts added where a piece still strains ([`super::darts`]).
     pub auto_darts: AutoDartOptions,
+    /// Hold every seam at its *negotiated* length (module docs) rather than
+    /// at its 3D length. Default true.
+    pub negotiate_seams: bool,
 }
 
 impl Default for PatternOptions {
@@ -57,6 +80,7 @@ impl Default for PatternOptions {
             flatten: FlattenOptions::default(),
             min_dart_intake_mm: 3.0,
             auto_darts: AutoDartOptions::default(),
+            negotiate_seams: true,
         }
     }
 }
@@ -183,16 +207,88 @@ pub fn pattern(
 /// piece's sew line crosses itself.
 type DartCheck = (String, f64, bool);
 
+/// Sewn-length ratio `ℓ′/ℓ` of every seam edge, keyed by its global
+/// vertex ids `(min, max)` (module docs, *Negotiated seams*).
+type SewnRatios = BTreeMap<(u32, u32), f64>;
+
 /// This panel's seams (and darts) as chains of local ids, for
-/// [`flatten_with_seams`] to true to their 3D lengths so both sides agree.
-fn seam_chains(panel: &Panel, seams: &[SeamChain]) -> Vec<Vec<u32>> {
+/// [`flatten_with_sewn_lengths`] to hold at their sewn lengths so both sides
+/// agree, with each chain edge's ratio from `sewn` (1 where it has none:
+/// the 3D length; always for dart legs). With `hold_seams` off only the
+/// dart legs are held (plus a one-vertex chain, which holds nothing, so
+/// that the seams are free rather than all held).
+fn seam_chains(panel: &Panel, seams: &[SeamChain], sewn: &SewnRatios, hold_seams: bool) -> SeamHolds {
+    let runs: Vec<Vec<u32>> = if hold_seams {
+        seam_runs(panel, seams)
+    } else {
+        panel.outline.first().map(|&v| vec![v]).into_iter().collect()
+    };
+    let ratios = runs
+        .iter()
+        .map(|run| {
+            run.windows(2)
+                .map(|w| {
+                    let (a, b) = (panel.global[w[0] as usize], panel.global[w[1] as usize]);
+                    sewn.get(&(a.min(b), a.max(b))).copied().unwrap_or(1.0)
+                })
+                .collect()
+        })
+        .collect();
+    let darts = panel.darts.iter().flat_map(|d| [d.a.clone(), d.b.clone()]);
+    SeamHolds { chains: runs.into_iter().chain(darts).collect(), ratios }
+}
+
+/// The runs of `panel`'s outline along its seams (local ids; a seam through
+/// a dart mouth runs in two pieces).
+fn seam_runs(panel: &Panel, seams: &[SeamChain]) -> Vec<Vec<u32>> {
     seams
         .iter()
         .filter(|s| s.panel_a == panel.index || s.panel_b == panel.index)
         .filter_map(|s| panel.seam_runs(&s.chain))
         .flatten()
-        .chain(panel.darts.iter().flat_map(|d| [d.a.clone(), d.b.clone()]))
         .collect()
+}
+
+/// Chains of local ids a panel's flattening holds, and the sewn-length
+/// ratios of the first ones' edges ([`flatten_with_sewn_lengths`]).
+struct SeamHolds {
+    chains: Vec<Vec<u32>>,
+    ratios: Vec<Vec<f64>>,
+}
+
+/// Flattens `panel` with `holds` ([`seam_chains`]).
+fn flatten_held(panel: &Panel, holds: &SeamHolds, opts: &FlattenOptions) -> Result<Flattening, FlattenError> {
+    flatten_with_sewn_lengths(&panel.positions, &panel.triangles, &holds.chains, &holds.ratios, opts)
+}
+
+/// The error of a failed flattening of `panel`.
+fn flatten_error(panel: &Panel) -> impl FnOnce(FlattenError) -> PatternError {
+    let name = panel.name.clone();
+    move |source| PatternError::Flatten { panel: name, source }
+}
+
+/// Negotiated seam lengths (module docs): every panel flattened with its
+/// seams free; each seam edge's ratio `ℓ′/ℓ` is the mean over the panels
+/// it borders.
+fn negotiate(panels: &[Panel], seams: &[SeamChain], opts: &FlattenOptions) -> Result<SewnRatios, PatternError> {
+    let none = SewnRatios::new();
+    let mut sum: BTreeMap<(u32, u32), (f64, u32)> = BTreeMap::new();
+    for panel in panels {
+        let flat = flatten_held(panel, &seam_chains(panel, seams, &none, false), opts).map_err(flatten_error(panel))?;
+        for run in seam_runs(panel, seams) {
+            for w in run.windows(2) {
+                let (u, v) = (w[0] as usize, w[1] as usize);
+                let l3 = panel.positions[u].distance(panel.positions[v]);
+                if l3 > 0.0 {
+                    let (a, b) = (panel.global[u], panel.global[v]);
+                    let e = sum.entry((a.min(b), a.max(b))).or_insert((0.0, 0));
+                    e.0 += flat.uv[u].distance(flat.uv[v]) / l3;
+                    e.1 += 1;
+                }
+            }
+        }
+    }
+    Ok(sum.into_iter().map(|(k, (s, n))| (k, s / f64::from(n))).collect())
 }
 
 /// One pass of [`pattern`] with every declared dart (and, with `find_darts`,
@@ -207,59 +303,115 @@ fn pattern_once(
     opts: &PatternOptions,
     find_darts: bool,
 ) -> Result<(GarmentPattern, Vec<DartCheck>), PatternError> {
-    let (mut panels, seams, lineage) = cut(t, positions, triangles, levels)?;
-    let mut pieces = Vec::with_capacity(panels.len());
-    let mut placed = Vec::with_capacity(panels.len());
-    let mut reports = Vec::with_capacity(panels.len());
+    let (cut_panels, seams, lineage) = cut(t, positions, triangles, levels)?;
     let n_nodes = t.nodes.len() as u32;
-    for panel in panels.iter_mut() {
-        let flat = flatten_with_seams(&panel.positions, &panel.triangles, &seam_chains(panel, &seams), &opts.flatten)
-            .map_err(|source| PatternError::Flatten { panel: panel.name.clone(), source })?;
-        let d = distortion(&panel.positions, &panel.triangles, &flat.uv);
-        let mut found_darts = Vec::new();
-        // `find_darts` is asked for only when the search is enabled ([`pattern`])
-        let (flat, d) = if find_darts && d.strain_p95 > opts.auto_darts.target_strain_p95 {
-            let first = Trial { flat, distortion: d };
-            let (found_panel, best, found) =
-                insert_darts(panel, first, n_nodes, opts.min_dart_intake_mm * 1e-3, &opts.auto_darts, |p| {
-                    let flat =
-                        flatten_with_seams(&p.positions, &p.triangles, &seam_chains(p, &seams), &opts.flatten).ok()?;
-                    Some(Trial { distortion: distortion(&p.positions, &p.triangles, &flat.uv), flat })
-                });
-            *panel = found_panel;
-            found_darts = found;
-            (best.flat, best.distortion)
-        } else {
-            (flat, d)
-        };
-        let panel = &*panel;
-        let p = assemble(t, panel, &seams, &lineage, &flat.uv, size, &opts.piece)?;
-        let area_3d_mm2 = panel
-            .triangles
-            .iter()
-            .map(|f| {
-                let [a, b, c] = f.map(|v| panel.positions[v as usize]);
-                0.5 * (b - a).cross(c - a).length()
-            })
-            .sum::<f64>()
-            * 1e6;
-        reports.push(PieceReport {
-            name: panel.name.clone(),
-            size: size.to_string(),
-            distortion: d,
-            iterations: flat.iterations,
-            converged: flat.converged,
-            fallback: flat.fallback,
-            area_3d_mm2,
-            hotspot: hotspot(t, panel, &p.uv_mm),
-            waist_deviation_mm: waist_deviation(t, panel, &p.piece),
-            sew_line_self_intersects: self_intersects(&p.piece.sew_line),
-            cut_line_self_intersects: self_intersects(&p.piece.cut_line),
-            found_darts,
-        });
-        pieces.push(p.piece.clone());
-        placed.push(p);
+    // darts where a piece strains, searched with the seams free when they are negotiated afterwards;
+    // per panel at most `cap` of them, lowered when the negotiated flattening of the darted panel
+    // folds or crosses its sew line (the search saw the free one)
+    let mut cap = vec![opts.auto_darts.max_darts; cut_panels.len()];
+    let mut searched: Vec<Option<(usize, Panel, Vec<FoundDart>)>> = vec![None; cut_panels.len()];
+    loop {
+        let mut panels = cut_panels.clone();
+        let mut found_darts = vec![Vec::new(); panels.len()];
+        if find_darts {
+            for (i, panel) in panels.iter_mut().enumerate() {
+                if let Some((c, p, f)) = &searched[i] {
+                    if *c == cap[i] {
+                        (*panel, found_darts[i]) = (p.clone(), f.clone());
+                        continue;
+                    }
+                }
+                let options = AutoDartOptions { max_darts: cap[i], ..opts.auto_darts };
+                (*panel, found_darts[i]) = search_darts(panel, &seams, n_nodes, opts, &options)?;
+                searched[i] = Some((cap[i], panel.clone(), found_darts[i].clone()));
+            }
+        }
+        let sewn = if opts.negotiate_seams { negotiate(&panels, &seams, &opts.flatten)? } else { SewnRatios::new() };
+        let mut pieces = Vec::with_capacity(panels.len());
+        let mut placed = Vec::with_capacity(panels.len());
+        let mut reports = Vec::with_capacity(panels.len());
+        let mut refused = false;
+        for (i, (panel, found_darts)) in panels.iter().zip(found_darts).enumerate() {
+            let holds = seam_chains(panel, &seams, &sewn, true);
+            let flat = flatten_held(panel, &holds, &opts.flatten).map_err(flatten_error(panel))?;
+            let d = distortion(&panel.positions, &panel.triangles, &flat.uv);
+            let p = assemble(t, panel, &seams, &lineage, &flat.uv, size, &opts.piece)?;
+            let sew_line_self_intersects = self_intersects(&p.piece.sew_line);
+            let cut_line_self_intersects = self_intersects(&p.piece.cut_line);
+            if !found_darts.is_empty() && (d.flipped > 0 || sew_line_self_intersects || cut_line_self_intersects) {
+                cap[i] = found_darts.len() - 1;
+                refused = true;
+            }
+            let area_3d_mm2 = panel
+                .triangles
+                .iter()
+                .map(|f| {
+                    let [a, b, c] = f.map(|v| panel.positions[v as usize]);
+                    0.5 * (b - a).cross(c - a).length()
+                })
+                .sum::<f64>()
+                * 1e6;
+            reports.push(PieceReport {
+                name: panel.name.clone(),
+                size: size.to_string(),
+                distortion: d,
+                iterations: flat.iterations,
+                converged: flat.converged,
+                fallback: flat.fallback,
+                area_3d_mm2,
+                hotspot: hotspot(t, panel, &p.uv_mm),
+                waist_deviation_mm: waist_deviation(t, panel, &p.piece),
+                sew_line_self_intersects,
+                cut_line_self_intersects,
+                found_darts,
+            });
+            pieces.push(p.piece.clone());
+            placed.push(p);
+        }
+        if !refused {
+            return Ok(finish(t, positions, size, panels, &seams, pieces, placed, reports));
+        }
     }
+}
+
+/// Darts found where `panel` strains ([`insert_darts`], with the seams free
+/// when they are negotiated afterwards): the darted panel and its darts.
+fn search_darts(
+    panel: &Panel,
+    seams: &[SeamChain],
+    n_nodes: u32,
+    opts: &PatternOptions,
+    search: &AutoDartOptions,
+) -> Result<(Panel, Vec<FoundDart>), PatternError> {
+    let free = SewnRatios::new();
+    let holds = |p: &Panel| seam_chains(p, seams, &free, !opts.negotiate_seams);
+    let flat = flatten_held(panel, &holds(panel), &opts.flatten).map_err(flatten_error(panel))?;
+    let d = distortion(&panel.positions, &panel.triangles, &flat.uv);
+    // the search is asked for only when it is enabled ([`pattern`])
+    if d.strain_p95 <= search.target_strain_p95 || search.max_darts == 0 {
+        return Ok((panel.clone(), Vec::new()));
+    }
+    let first = Trial { flat, distortion: d };
+    let min_intake = opts.min_dart_intake_mm * 1e-3;
+    let (found_panel, _, found) = insert_darts(panel, first, n_nodes, min_intake, search, |p| {
+        let flat = flatten_held(p, &holds(p), &opts.flatten).ok()?;
+        Some(Trial { distortion: distortion(&p.positions, &p.triangles, &flat.uv), flat })
+    });
+    Ok((found_panel, found))
+}
+
+/// The seam reports and dart checks of the laid-out pieces, and the pattern.
+#[expect(clippy::too_many_arguments, reason = "the parts of one pass of pattern_once, handed over once")]
+fn finish(
+    t: &Template,
+    positions: &[DVec3],
+    size: &str,
+    panels: Vec<Panel>,
+    seams: &[SeamChain],
+    pieces: Vec<PatternPiece>,
+    placed: Vec<PlacedPanel>,
+    reports: Vec<PieceReport>,
+) -> (GarmentPattern, Vec<DartCheck>) {
     let seam_reports = seams
         .iter()
         .map(|s| {
@@ -332,7 +484,7 @@ fn pattern_once(
         seams: seam_reports,
         darts_left_out: Vec::new(),
     };
-    Ok((g, darts))
+    (g, darts)
 }
 
 /// Centroid of the edges strained above the 95th percentile and the nearest template node.

@@ -170,6 +170,19 @@ impl<'a> Builder<'a> {
     /// each tied to its point and eased outwards by `ease_mm / 2π`. Every
     /// ring edge gets a profile along the eased girth.
     fn ring(&mut self, curve: CurveId, points: &[PointId], ease_mm: f64) -> Result<Ring, AuthorError> {
+        self.ring_through(curve, points, ease_mm, None)
+    }
+
+    /// [`Self::ring`], its node `k` replaced by the existing node `node`
+    /// when `through` is `Some((k, node))`: the ring's arcs to and from it
+    /// are bent (by a linear blend along the arc) to end there.
+    fn ring_through(
+        &mut self,
+        curve: CurveId,
+        points: &[PointId],
+        ease_mm: f64,
+        through: Option<(usize, u32)>,
+    ) -> Result<Ring, AuthorError> {
         let loop_ = bridged(self.curve(curve)?);
         let mut params = Vec::with_capacity(points.len());
         for id in points {
@@ -177,12 +190,30 @@ impl<'a> Builder<'a> {
             params.push(loop_.closest(p).map_or(0.0, |c| c.s));
         }
         let radial = ease_mm * MM / std::f64::consts::TAU;
-        let nodes: Vec<u32> =
-            params.iter().zip(points).map(|(&t, &tie)| self.node(eased(&loop_, t, radial), Some(tie))).collect();
+        let nodes: Vec<u32> = params
+            .iter()
+            .zip(points)
+            .enumerate()
+            .map(|(k, (&t, &tie))| match through {
+                Some((at, node)) if at == k => node,
+                _ => self.node(eased(&loop_, t, radial), Some(tie)),
+            })
+            .collect();
         let ring = Ring { nodes, curve: loop_, params, radial };
         for i in 0..ring.nodes.len() {
             let j = (i + 1) % ring.nodes.len();
-            let pts = self.ring_arc(&ring, ring.params[i], ring.params[j]);
+            let mut pts = self.ring_arc(&ring, ring.params[i], ring.params[j]);
+            let last = pts.len() - 1;
+            for (end, from_start) in [(i, true), (j, false)] {
+                if through.is_some_and(|(at, _)| at == end) {
+                    let shift =
+                        self.draft.positions[ring.nodes[end] as usize] - if from_start { pts[0] } else { pts[last] };
+                    for (k, p) in pts.iter_mut().enumerate() {
+                        let w = k as f64 / last as f64;
+                        *p += shift * if from_start { 1.0 - w } else { w };
+                    }
+                }
+            }
             self.draft.profiles.push(((ring.nodes[i], ring.nodes[j]), pts));
         }
         Ok(ring)
@@ -687,7 +718,12 @@ impl Default for TrouserOptions {
 
 /// Authors straight trousers: waist and hip rings, crotch node, thigh,
 /// knee and hem rings per leg; front and back panels per leg; side,
-/// inside-leg and crotch seams.
+/// inside-leg and crotch seams. Each thigh ring runs through the crotch
+/// node in place of its inner point, so the four seams meet there as in a
+/// cut pair of trousers: where the thighs touch, the inner point lies a few
+/// millimetres from the crotch node (male-average fixture: 8 mm), and a
+/// triangle between them and the thigh front subdivided into needles that
+/// folded (front p95 strain 4.1 % with it, 2.5 % without).
 pub fn trousers(body: &FeatureBody, o: &TrouserOptions) -> Result<Template, AuthorError> {
     use PointId as P;
     let mut b = Builder::new(body, o.profile_points);
@@ -714,7 +750,8 @@ pub fn trousers(body: &FeatureBody, o: &TrouserOptions) -> Result<Template, Auth
                 (CurveId::AnkleRight, [P::AnkleRight, P::AnkleRightFront, P::AnkleRightInner, P::AnkleRightBack]),
             )
         };
-        let t = b.ring(thigh.0, &thigh.1, o.thigh_ease_mm)?;
+        // the thigh ring's inner node is the crotch node: the inside-leg seams start there
+        let t = b.ring_through(thigh.0, &thigh.1, o.thigh_ease_mm, Some((2, c)))?;
         let k = b.ring(knee.0, &knee.1, o.knee_ease_mm)?;
         let a = b.ring(ankle.0, &ankle.1, o.hem_ease_mm)?;
         b.hang(&k, &t, &a);
@@ -732,10 +769,8 @@ pub fn trousers(body: &FeatureBody, o: &TrouserOptions) -> Result<Template, Auth
             if side == 0 { (h[0], h[1], h[2], h[3], h[4]) } else { (h[0], h[7], h[6], h[5], h[4]) };
         f.extend(b.quad(hf, hfs, tf, c));
         f.extend(b.quad(hfs, hs, to, tf));
-        f.push(b.tri(c, tf, ti));
         bk.extend(b.quad(hs, hbs, tb, to));
         bk.extend(b.quad(hbs, hb, c, tb));
-        bk.push(b.tri(c, ti, tb));
         for col in front_cols {
             f.extend(upper[col].into_iter().chain(lower[col]));
         }
@@ -775,8 +810,8 @@ pub fn trousers(body: &FeatureBody, o: &TrouserOptions) -> Result<Template, Auth
     let (l, r) = (&legs[0], &legs[1]);
     b.seam("side_left", "left_front", "left_back", vec![waist.nodes[2], h[2], l.3, l.1.nodes[0], l.2.nodes[0]]);
     b.seam("side_right", "right_back", "right_front", vec![waist.nodes[6], h[6], r.3, r.1.nodes[0], r.2.nodes[0]]);
-    b.seam("inseam_left", "left_back", "left_front", vec![c, l.4, l.1.nodes[2], l.2.nodes[2]]);
-    b.seam("inseam_right", "right_front", "right_back", vec![c, r.4, r.1.nodes[2], r.2.nodes[2]]);
+    b.seam("inseam_left", "left_back", "left_front", vec![c, l.1.nodes[2], l.2.nodes[2]]);
+    b.seam("inseam_right", "right_front", "right_back", vec![c, r.1.nodes[2], r.2.nodes[2]]);
     b.seam("crotch_front", "right_front", "left_front", vec![waist.nodes[0], h[0], c]);
     b.seam("crotch_back", "left_back", "right_back", vec![waist.nodes[4], h[4], c]);
     b.draft.notches = vec![
