@@ -79,6 +79,17 @@ fn main() {
                     d.strain_max * 100.0
                 );
                 line += &format!("[{}]", r.found_darts.len());
+                if std::env::var("DARTS").is_ok() {
+                    for fd in &r.found_darts {
+                        line += &format!(
+                            " <{:.0}mm/{:.1}mm {:.2}→{:.2}>",
+                            fd.length_mm,
+                            fd.intake_mm,
+                            fd.strain_p95_before * 100.0,
+                            fd.strain_p95_after * 100.0
+                        );
+                    }
+                }
             }
             if !g.pattern.darts_left_out.is_empty() {
                 line += &format!(" out:{:?}", g.pattern.darts_left_out.iter().map(|d| d.0.clone()).collect::<Vec<_>>());

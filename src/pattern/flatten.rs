@@ -1774,6 +1774,40 @@ mod tests {
     }
 
     #[test]
+    fn seams_are_held_at_their_sewn_ratios() {
+        // a 60° cap: its rim wants to be longer than in 3D (module docs), so the ratios are felt
+        let (p, t) = cap(0.5, 30.0, 24);
+        let ring = boundary_loop(&t);
+        let quarter = ring.len() / 4;
+        let chains = vec![ring[..=quarter].to_vec(), ring[2 * quarter..=3 * quarter].to_vec()];
+        let ratios = vec![vec![1.05; quarter], vec![0.97; quarter - 2]];
+        let f = flatten_with_sewn_lengths(&p, &t, &chains, &ratios, &FlattenOptions::default()).expect("flatten");
+        assert_eq!(distortion(&p, &t, &f.uv).flipped, 0);
+        for (k, chain) in chains.iter().enumerate() {
+            for (i, w) in chain.windows(2).enumerate() {
+                let (a, b) = (w[0] as usize, w[1] as usize);
+                // the second chain's last two edges have no ratio: their 3D length
+                let want = ratios[k].get(i).copied().unwrap_or(1.0) * p[a].distance(p[b]);
+                let got = f.uv[a].distance(f.uv[b]);
+                assert!((got / want - 1.0).abs() < 1e-4, "chain {k} edge {i}: {got} for {want}");
+            }
+        }
+        // ratios of 1 are the plain seams, bit for bit
+        let ones: Vec<Vec<f64>> = chains.iter().map(|c| vec![1.0; c.len() - 1]).collect();
+        let plain = flatten_with_seams(&p, &t, &chains, &FlattenOptions::default()).expect("flatten");
+        let unit = flatten_with_sewn_lengths(&p, &t, &chains, &ones, &FlattenOptions::default()).expect("flatten");
+        assert_eq!(plain.uv, unit.uv);
+        for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            let ratios = vec![vec![1.0, 1.0, bad]];
+            let got = flatten_with_sewn_lengths(&p, &t, &chains, &ratios, &FlattenOptions::default());
+            assert!(
+                matches!(got, Err(FlattenError::SewnRatio { seam: 0, edge: 2, ratio }) if ratio.to_bits() == bad.to_bits()),
+                "{bad}: {got:?}"
+            );
+        }
+    }
+
+    #[test]
     fn boundary_lengths_survive_on_doubly_curved_patches() {
         for (name, (p, t)) in [("sphere cap 60°", cap(0.5, 30.0, 30)), ("saddle", saddle())] {
             eprintln!("{name} ({} triangles, boundary {:.3} m):", t.len(), {
