@@ -3,7 +3,8 @@
 //! print each piece's p95 edge strain, |E_s| and strain hotspot.
 //!
 //! `cargo run --release --example strain_probe -- trousers '{"thigh_ease_mm":90}'`
-//! (`AUTO='{"candidates":8}'` overrides the found-dart search's options;
+//! (`AUTO='{"candidates":8}'` overrides the found-dart search's options,
+//! `FLAT='{"hem_weight":0.5}'` the flattening's;
 //! `[n]` after a piece is how many darts the search added).
 
 use std::path::Path;
@@ -51,6 +52,9 @@ fn main() {
             let maps = gpu.render(&body.mesh, &RenderOptions::default()).unwrap();
             let obstacle = Obstacle { maps, tree: WindingTree::new(&body.mesh, &WindingOptions::default()) };
             let mut go = GradeOptions::default();
+            if let Ok(f) = std::env::var("FLAT") {
+                go.pattern.flatten = serde_json::from_str(&f).unwrap();
+            }
             if let Ok(a) = std::env::var("AUTO") {
                 go.pattern.auto_darts = serde_json::from_str(&a).unwrap();
             }
