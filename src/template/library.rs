@@ -721,7 +721,7 @@ impl Default for TrouserOptions {
 /// inside-leg and crotch seams. Each thigh ring runs through the crotch
 /// node in place of its inner point, so the four seams meet there as in a
 /// cut pair of trousers: where the thighs touch, the inner point lies a few
-/// millimetres from the crotch node (male-average fixture: 8 mm), and a
+/// millimetres from the crotch node (male-average fixture: 7 mm), and a
 /// triangle between them and the thigh front subdivided into needles that
 /// folded (front p95 strain 4.1 % with it, 2.5 % without).
 pub fn trousers(body: &FeatureBody, o: &TrouserOptions) -> Result<Template, AuthorError> {
