@@ -471,14 +471,10 @@ pub fn flatten_with_sewn_lengths(
         }
     }
     chain_edges.sort_unstable_by_key(|a| a.0);
-    let find = |e: &[u32; 2]| chain_edges.binary_search_by(|c| c.0.cmp(&edge_key(e[0], e[1]))).ok();
-    let seam: Vec<bool> = if seams.is_empty() {
-        vec![true; mesh.boundary.len()]
-    } else {
-        mesh.boundary.iter().map(|e| find(e).is_some()).collect()
-    };
-    for k in 0..mesh.boundary.len() {
-        if let Some(at) = find(&mesh.boundary[k]) {
+    let mut seam = vec![seams.is_empty(); mesh.boundary.len()];
+    for (k, e) in mesh.boundary.iter().enumerate() {
+        if let Ok(at) = chain_edges.binary_search_by(|c| c.0.cmp(&edge_key(e[0], e[1]))) {
+            seam[k] = true;
             mesh.boundary_length[k] *= chain_edges[at].1;
         }
     }

@@ -286,26 +286,16 @@ fn flatten_error(panel: &Panel) -> impl FnOnce(FlattenError) -> PatternError {
 /// seams free; along each seam, between consecutive template nodes (where
 /// notches sit), both sides are held at the mean of the lengths they took,
 /// each edge scaled from its own free length.
-fn negotiate(
-    panels: &[Panel],
-    seams: &[SeamChain],
-    n_nodes: u32,
-    power: f64,
-    opts: &FlattenOptions,
-) -> Result<SewnRatios, PatternError> {
-    let none = SewnRatios::new();
-    let mut flats = Vec::with_capacity(panels.len());
-    let mut say = Vec::with_capacity(panels.len());
-    for panel in panels {
-        let flat = flatten_held(panel, &seam_chains(panel, seams, &none, false), opts).map_err(flatten_error(panel))?;
-        let p95 = distortion(&panel.positions, &panel.triangles, &flat.uv).strain_p95;
-        // a side without strain has no say of its own (nor does any side when none strains)
-        say.push(if power == 0.0 { 1.0 } else { p95.max(0.0).powf(power) });
-        flats.push(flat);
-    }
+fn negotiate(panels: &[Panel], free: &[Trial], seams: &[SeamChain], n_nodes: u32, power: f64) -> SewnRatios {
+    // a side without strain has no say of its own (nor does any side when none strains)
+    let say: Vec<f64> =
+        free.iter().map(|f| if power == 0.0 { 1.0 } else { f.distortion.strain_p95.max(0.0).powf(power) }).collect();
+    let flats: Vec<&Flattening> = free.iter().map(|f| &f.flat).collect();
     let mut sewn = SewnRatios::new();
     for s in seams.iter().filter(|s| s.panel_a != s.panel_b) {
         let sides = [s.panel_a, s.panel_b];
+        let weights = sides.map(|p| say[p]);
+        let total: f64 = weights.iter().sum();
         let Some(edges) = sides.iter().map(|&p| panels[p].seam_edges(&s.chain)).collect::<Option<Vec<_>>>() else {
             continue;
         };
@@ -331,8 +321,6 @@ fn negotiate(
                 continue;
             }
             let free: Vec<f64> = lengths.iter().map(|l| l[start..end].iter().map(|e| e.1).sum()).collect();
-            let weights: Vec<f64> = sides.iter().map(|&p| say[p]).collect();
-            let total: f64 = weights.iter().sum();
             let held = if total > 0.0 && total.is_finite() {
                 free.iter().zip(&weights).map(|(f, w)| f * w).sum::<f64>() / total
             } else {
@@ -350,7 +338,14 @@ fn negotiate(
             start = end;
         }
     }
-    Ok(sewn)
+    sewn
+}
+
+/// `panel` flattened with its seams free (dart legs held), and how it strains.
+fn flatten_free(panel: &Panel, seams: &[SeamChain], opts: &FlattenOptions) -> Result<Trial, PatternError> {
+    let flat = flatten_held(panel, &seam_chains(panel, seams, &SewnRatios::new(), false), opts)
+        .map_err(flatten_error(panel))?;
+    Ok(Trial { distortion: distortion(&panel.positions, &panel.triangles, &flat.uv), flat })
 }
 
 /// One pass of [`pattern`] with every declared dart (and, with `find_darts`,
@@ -371,25 +366,35 @@ fn pattern_once(
     // per panel at most `cap` of them, lowered when the negotiated flattening of the darted panel
     // folds or crosses its sew line (the search saw the free one)
     let mut cap = vec![opts.auto_darts.max_darts; cut_panels.len()];
-    let mut searched: Vec<Option<(usize, Panel, Vec<FoundDart>)>> = vec![None; cut_panels.len()];
+    // per panel: the cap searched with, the darted panel, its darts and its search flattening
+    let mut searched: Vec<Option<(usize, Searched)>> = vec![None; cut_panels.len()];
     loop {
         let mut panels = cut_panels.clone();
         let mut found_darts = vec![Vec::new(); panels.len()];
+        // with negotiated seams, the search's last flattening is the free one the negotiation needs
+        let mut free: Vec<Option<Trial>> = vec![None; panels.len()];
         if find_darts {
             for (i, panel) in panels.iter_mut().enumerate() {
-                if let Some((c, p, f)) = &searched[i] {
-                    if *c == cap[i] {
-                        (*panel, found_darts[i]) = (p.clone(), f.clone());
-                        continue;
+                let hit = searched[i].as_ref().filter(|(c, _)| *c == cap[i]).map(|(_, s)| s.clone());
+                let found = match hit {
+                    Some(found) => found,
+                    None => {
+                        let options = AutoDartOptions { max_darts: cap[i], ..opts.auto_darts };
+                        let found = search_darts(panel, &seams, n_nodes, opts, &options)?;
+                        searched[i] = Some((cap[i], found.clone()));
+                        found
                     }
-                }
-                let options = AutoDartOptions { max_darts: cap[i], ..opts.auto_darts };
-                (*panel, found_darts[i]) = search_darts(panel, &seams, n_nodes, opts, &options)?;
-                searched[i] = Some((cap[i], panel.clone(), found_darts[i].clone()));
+                };
+                (*panel, found_darts[i], free[i]) = (found.panel, found.darts, Some(found.last));
             }
         }
         let sewn = if opts.negotiate_seams {
-            negotiate(&panels, &seams, n_nodes, opts.negotiation_power, &opts.flatten)?
+            let free = if find_darts {
+                free.into_iter().flatten().collect()
+            } else {
+                panels.iter().map(|p| flatten_free(p, &seams, &opts.flatten)).collect::<Result<Vec<_>, _>>()?
+            };
+            negotiate(&panels, &free, &seams, n_nodes, opts.negotiation_power)
         } else {
             SewnRatios::new()
         };
@@ -440,30 +445,38 @@ fn pattern_once(
     }
 }
 
+/// What [`search_darts`] found on one panel.
+#[derive(Clone)]
+struct Searched {
+    /// The panel with its found darts slit open.
+    panel: Panel,
+    /// The darts, in the order found.
+    darts: Vec<FoundDart>,
+    /// The darted panel's flattening in the search (seams free when they are
+    /// negotiated afterwards, else held at their 3D length).
+    last: Trial,
+}
+
 /// Darts found where `panel` strains ([`insert_darts`], with the seams free
-/// when they are negotiated afterwards): the darted panel and its darts.
+/// when they are negotiated afterwards).
 fn search_darts(
     panel: &Panel,
     seams: &[SeamChain],
     n_nodes: u32,
     opts: &PatternOptions,
     search: &AutoDartOptions,
-) -> Result<(Panel, Vec<FoundDart>), PatternError> {
+) -> Result<Searched, PatternError> {
     let free = SewnRatios::new();
     let holds = |p: &Panel| seam_chains(p, seams, &free, !opts.negotiate_seams);
     let flat = flatten_held(panel, &holds(panel), &opts.flatten).map_err(flatten_error(panel))?;
-    let d = distortion(&panel.positions, &panel.triangles, &flat.uv);
-    // the search is asked for only when it is enabled ([`pattern`])
-    if d.strain_p95 <= search.target_strain_p95 || search.max_darts == 0 {
-        return Ok((panel.clone(), Vec::new()));
-    }
-    let first = Trial { flat, distortion: d };
+    let first = Trial { distortion: distortion(&panel.positions, &panel.triangles, &flat.uv), flat };
+    // the search is asked for only when it is enabled ([`pattern`]); it stops at once below the target
     let min_intake = opts.min_dart_intake_mm * 1e-3;
-    let (found_panel, _, found) = insert_darts(panel, first, n_nodes, min_intake, search, |p| {
+    let (panel, last, darts) = insert_darts(panel, first, n_nodes, min_intake, search, |p| {
         let flat = flatten_held(p, &holds(p), &opts.flatten).ok()?;
         Some(Trial { distortion: distortion(&p.positions, &p.triangles, &flat.uv), flat })
     });
-    Ok((found_panel, found))
+    Ok(Searched { panel, darts, last })
 }
 
 /// The seam reports and dart checks of the laid-out pieces, and the pattern.
