@@ -1,6 +1,11 @@
 //! One grade: a template on a feature body, end to end — decode (seed 000
-//! Eq. 1), refine with collision avoidance (§5, issue #4), tangential
-//! relaxation, the exact final pass, and the sewing pattern (§6, issue #5).
+//! Eq. 1), nodes and profile points moved out of the body
+//! ([`crate::refine::clear::clear_coarse`], issue #13), refine with
+//! collision avoidance (§5, issue #4), tangential relaxation, the exact final
+//! pass over every vertex (fixed ones to their smaller clearance), the
+//! garment surface lifted until no triangle crosses the body
+//! ([`crate::refine::clear::clear_surface`]), and the sewing pattern (§6,
+//! issue #5).
 //!
 //! Pure core: data in, data out; the body's depth maps come in as an
 //! [`Obstacle`] that the caller renders (and caches) with
@@ -17,6 +22,7 @@ use serde::{Deserialize, Serialize};
 use crate::body::feature::FeatureBody;
 use crate::collide::cache::Obstacle;
 use crate::pattern::garment::{pattern, GarmentPattern, PatternError, PatternOptions};
+use crate::refine::clear::{clear_coarse, clear_surface, ClearError, ClearOptions};
 use crate::refine::collision::{Collider, CollisionOptions, CollisionReport};
 use crate::refine::subdivide::{refine, relax_tangentially, LevelReport, RefineError, RefineMesh, RefineOptions};
 use crate::template::codec::{decode, CodecError};
@@ -37,6 +43,8 @@ pub struct GradeOptions {
     pub refine: RefineOptions,
     /// Collision avoidance (the clearance above overrides its field).
     pub collision: CollisionOptions,
+    /// Keeping fixed vertices and the garment surface outside the body.
+    pub clear: ClearOptions,
     /// Pattern pieces and flattening (the allowance above overrides its field).
     pub pattern: PatternOptions,
 }
@@ -50,6 +58,9 @@ pub enum PipelineError {
     /// Subdivision failed.
     #[error(transparent)]
     Refine(#[from] RefineError),
+    /// A profile could not be solved again after it was moved out of the body.
+    #[error(transparent)]
+    Clear(#[from] ClearError),
     /// The pattern failed.
     #[error(transparent)]
     Pattern(#[from] PatternError),
@@ -60,8 +71,11 @@ pub enum PipelineError {
 pub struct StageTimings {
     /// Decoding the template onto the body.
     pub decode_ms: f64,
-    /// Subdivision, fairing and collision avoidance.
+    /// Subdivision, fairing and collision avoidance (without the clearing below).
     pub refine_ms: f64,
+    /// Moving nodes and profile points out before refinement and lifting the
+    /// surface off the body after it (exact tests).
+    pub clear_ms: f64,
     /// Cutting, flattening and assembling the pattern.
     pub pattern_ms: f64,
 }
@@ -104,10 +118,17 @@ pub fn grade(
     pattern_opts.piece.seam_allowance_mm = opts.seam_allowance_mm.unwrap_or(t.defaults.seam_allowance_mm);
 
     let start = Instant::now();
-    let m0 = decode(t, body, t.defaults.relocation)?;
+    let mut m0 = decode(t, body, t.defaults.relocation)?;
     let edges: Vec<(u32, u32)> = t.edges.iter().map(|e| (e.start, e.end)).collect();
+    let clear_start = Instant::now();
+    let coarse_clear = match obstacle {
+        Some(ob) => clear_coarse(&mut m0, &edges, &ob.tree, &opts.clear)?,
+        None => Default::default(),
+    };
+    let coarse_ms = ms(clear_start);
+    let mut surface_ms = 0.0;
     let coarse = RefineMesh::from_coarse(&m0, &edges)?;
-    let decode_ms = ms(start);
+    let decode_ms = ms(start) - coarse_ms;
 
     let start = Instant::now();
     let (mesh, level_reports, collision) = match obstacle {
@@ -116,7 +137,13 @@ pub fn grade(
             let (mut mesh, reports) = refine(coarse, &refine_opts, |p, h| collider.after_sweep(p, h))?;
             relax_tangentially(&mut mesh, refine_opts.relax_sweeps, refine_opts.relax_step)?;
             collider.settle(&ob.tree, &mut mesh.positions, &mesh.fixed);
-            (mesh, reports, collider.report)
+            collider.settle_fixed(&ob.tree, &mut mesh.positions, &mesh.fixed, &opts.clear);
+            let mut report = collider.report;
+            report.coarse = coarse_clear;
+            let surface_start = Instant::now();
+            report.surface = clear_surface(&ob.tree, &mut mesh.positions, &mesh.triangles, clearance_mm, &opts.clear);
+            surface_ms = ms(surface_start);
+            (mesh, reports, report)
         }
         None => {
             let (mut mesh, reports) = refine(coarse, &refine_opts, |_, _| {})?;
@@ -134,6 +161,11 @@ pub fn grade(
         levels: level_reports,
         collision,
         pattern,
-        timings: StageTimings { decode_ms, refine_ms, pattern_ms },
+        timings: StageTimings {
+            decode_ms,
+            refine_ms: refine_ms - surface_ms,
+            clear_ms: coarse_ms + surface_ms,
+            pattern_ms,
+        },
     })
 }

@@ -237,3 +237,52 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn front_landmark_off_the_centre_line_is_refused() {
+    let (_, mesh, mut lm) = fixture_bodies().swap_remove(1);
+    // 5 cm to the body's left of the centre front line, still on the skin (snapped)
+    let p = lm.points[&PointId::WaistFront];
+    lm.points.insert(PointId::WaistFront, p + DVec3::new(0.05, 0.0, 0.0));
+    match derive_features(mesh, &lm, &DeriveOptions::default()).unwrap_err() {
+        FeatureError::OffMidline { point, offset_mm, limit_mm } => {
+            assert_eq!(point, PointId::WaistFront);
+            assert!(offset_mm > limit_mm && offset_mm <= 50.0, "{offset_mm}");
+            assert_eq!(limit_mm, 30.0);
+        }
+        e => panic!("expected OffMidline, got {e}"),
+    }
+}
+
+#[test]
+fn armscye_longer_than_the_chest_is_refused() {
+    let (_, mesh, mut lm) = fixture_bodies().swap_remove(1);
+    // the chest girth given as the left armscye: an armscye as long as the bust
+    let body = derive(mesh.clone(), &lm);
+    let chest = body.curves[&CurveId::Chest].polyline.clone();
+    lm.curves.insert(CurveId::ArmscyeLeft, chest);
+    match derive_features(mesh, &lm, &DeriveOptions::default()).unwrap_err() {
+        FeatureError::ImplausibleGirth { curve, girth_mm, max_mm, .. } => {
+            assert_eq!(curve, CurveId::ArmscyeLeft);
+            assert!(girth_mm > max_mm, "{girth_mm} vs {max_mm}");
+        }
+        e => panic!("expected ImplausibleGirth, got {e}"),
+    }
+}
+
+#[test]
+fn armscye_section_through_the_torso_is_refused() {
+    let (_, mesh, mut lm) = fixture_bodies().swap_remove(1);
+    // the underarm point moved towards the midline: the armscye plane (through the
+    // shoulder and underarm points, containing the depth axis) cuts into the torso
+    let u = lm.points[&PointId::UnderarmLeft];
+    lm.points.insert(PointId::UnderarmLeft, DVec3::new(0.3 * u.x, u.y - 0.05, u.z));
+    let e = derive_features(mesh, &lm, &DeriveOptions::default()).unwrap_err();
+    match e {
+        FeatureError::ImplausibleGirth { curve, girth_mm, max_mm, ref reason, .. } => {
+            assert_eq!(curve, CurveId::ArmscyeLeft, "{e}");
+            assert!(girth_mm > max_mm && reason.contains("chest"), "{e}");
+        }
+        e => panic!("expected ImplausibleGirth, got {e}"),
+    }
+}

@@ -394,7 +394,15 @@ fn scan_flow_multipart() {
     assert!(j["expires_in_s"].as_u64().unwrap() > 0);
     let garment = &j["report"]["bodies"][0]["garments"][0];
     assert_eq!(garment["fit"]["vertices_inside_body"], 0);
-    assert!(garment["fit"]["girth_ease_mm"]["hip_girth"].as_f64().unwrap() > 0.0);
+    let eases = garment["fit"]["girth_ease"].as_array().unwrap();
+    let hip = eases.iter().find(|e| e["girth"] == "hip").expect("hip ease reported");
+    assert!(hip["measured_mm"].as_f64().unwrap() > 0.0, "{hip}");
+    assert!(
+        eases.iter().all(|e| ["waist", "hip", "thigh", "knee"].contains(&e["girth"].as_str().unwrap())),
+        "{eases:?}"
+    );
+    assert_eq!(garment["fit"]["penetration"]["intersecting_triangle_pairs"], 0);
+    assert!(garment["fit"]["penetration"]["deepest_mm"].as_f64().unwrap() <= 1.0);
     let href = j["href"].as_str().unwrap();
     let g = call("GET", &s.url(&format!("{href}/trousers-scan.garment.glb")), &[], None);
     assert_eq!((g.status, &g.body[..4]), (200, &b"glTF"[..]));

@@ -90,6 +90,19 @@ pub struct DeriveOptions {
     /// that a girth plane passing just beyond an end still crosses it.
     /// Default 30.
     pub path_extension_mm: f64,
+    /// Largest accepted distance of a midline landmark (centre front and
+    /// back: neck, bust, underbust, waist, hip front/back, crotch) from the
+    /// mid-sagittal plane through the left/right landmark pairs, mm.
+    /// Default 30 (placement error on a real scan is a few mm; 5 cm skews
+    /// the whole garment).
+    pub max_midline_offset_mm: f64,
+    /// Largest accepted armscye girth as a share of the chest girth.
+    /// Default 0.75 (bodies measure 0.40–0.55; a section through the torso
+    /// measures more than the chest).
+    pub max_armscye_to_chest: f64,
+    /// Largest accepted girth as a share of the stature. Default 1.3 (the
+    /// heaviest bodies of the hm08 model reach 1.1 at the hip).
+    pub max_girth_to_stature: f64,
 }
 
 impl Default for DeriveOptions {
@@ -106,6 +119,9 @@ impl Default for DeriveOptions {
             path_extension_mm: 30.0,
             weld_tolerance_mm: 0.01,
             ankle_half_width_mm: 35.0,
+            max_midline_offset_mm: 30.0,
+            max_armscye_to_chest: 0.75,
+            max_girth_to_stature: 1.3,
         }
     }
 }
@@ -176,6 +192,35 @@ pub enum FeatureError {
         /// Their closest distance, mm.
         gap_mm: f64,
     },
+    /// A centre-front or centre-back landmark lies off the body's
+    /// mid-sagittal plane.
+    #[error(
+        "landmark `{point}` is {offset_mm:.1} mm from the mid-sagittal plane of the left/right landmarks \
+         (plausible: up to {limit_mm} mm); place centre-front and centre-back points on the centre line"
+    )]
+    OffMidline {
+        /// The landmark.
+        point: PointId,
+        /// Its distance from the plane, mm.
+        offset_mm: f64,
+        /// The limit, mm.
+        limit_mm: f64,
+    },
+    /// A girth measures outside what a human body can have, given the
+    /// stature and its neighbours (a section that runs through the torso).
+    #[error("curve `{curve}` measures {girth_mm:.0} mm; plausible: {min_mm:.0}–{max_mm:.0} mm ({reason})")]
+    ImplausibleGirth {
+        /// The curve.
+        curve: CurveId,
+        /// Its tape length, mm.
+        girth_mm: f64,
+        /// Lower bound, mm.
+        min_mm: f64,
+        /// Upper bound, mm.
+        max_mm: f64,
+        /// The rule that bounds it.
+        reason: String,
+    },
     /// The frame at a point is (nearly) degenerate.
     #[error("degenerate frame at `{point}`: |t(f1)·(t(f2)×n)| = {triple:.3} < {min}")]
     DegenerateFrame {
@@ -233,6 +278,7 @@ pub fn derive_features(
         }
         snapped.insert(id, sp.point);
     }
+    check_midline(&snapped, opts)?;
 
     let mut curves = BTreeMap::new();
     for def in vocab::CURVES {
@@ -242,6 +288,7 @@ pub fn derive_features(
         };
         curves.insert(def.id, curve);
     }
+    check_girths(&curves, stature, opts)?;
 
     let mut points = BTreeMap::new();
     let h = opts.tangent_window_mm / MM_PER_M;
@@ -281,6 +328,115 @@ pub fn derive_features(
         points.insert(def.id, FeaturePoint { position, frame, crossing_gap: cross.gap });
     }
     Ok(FeatureBody { mesh, curves, points })
+}
+
+/// Landmarks that lie on the centre front or centre back line.
+const MIDLINE: [PointId; 12] = [
+    PointId::NeckFront,
+    PointId::NeckBack,
+    PointId::ChestFront,
+    PointId::ChestBack,
+    PointId::BustFront,
+    PointId::BustBack,
+    PointId::UnderbustFront,
+    PointId::UnderbustBack,
+    PointId::WaistFront,
+    PointId::WaistBack,
+    PointId::HipFront,
+    PointId::HipBack,
+];
+
+/// Left/right landmark pairs that span the mid-sagittal plane.
+const PAIRS: [(PointId, PointId); 5] = [
+    (PointId::ShoulderLeft, PointId::ShoulderRight),
+    (PointId::UnderarmLeft, PointId::UnderarmRight),
+    (PointId::WaistLeft, PointId::WaistRight),
+    (PointId::HipLeft, PointId::HipRight),
+    (PointId::NeckLeft, PointId::NeckRight),
+];
+
+/// Plausibility of the midline landmarks: the mid-sagittal plane passes
+/// through the mean midpoint of the left/right pairs given, with the mean
+/// right-to-left direction (made horizontal) as its normal; every midline
+/// landmark given must lie within [`DeriveOptions::max_midline_offset_mm`].
+/// Without a pair there is nothing to check against.
+fn check_midline(snapped: &BTreeMap<PointId, DVec3>, opts: &DeriveOptions) -> Result<(), FeatureError> {
+    let pairs: Vec<(DVec3, DVec3)> =
+        PAIRS.iter().filter_map(|(l, r)| Some((*snapped.get(l)?, *snapped.get(r)?))).collect();
+    if pairs.is_empty() {
+        return Ok(());
+    }
+    let mid = pairs.iter().map(|(l, r)| 0.5 * (*l + *r)).sum::<DVec3>() / pairs.len() as f64;
+    let across = pairs.iter().map(|(l, r)| *l - *r).sum::<DVec3>();
+    let Some(plane) = Plane::from_point_normal(mid, DVec3::new(across.x, 0.0, across.z)) else { return Ok(()) };
+    for id in MIDLINE {
+        let Some(&p) = snapped.get(&id) else { continue };
+        let offset_mm = plane.signed_distance(p).abs() * MM_PER_M;
+        if offset_mm > opts.max_midline_offset_mm {
+            return Err(FeatureError::OffMidline { point: id, offset_mm, limit_mm: opts.max_midline_offset_mm });
+        }
+    }
+    Ok(())
+}
+
+/// Plausibility of the girths: each at most [`DeriveOptions::max_girth_to_stature`]
+/// of the stature, and each armscye at most [`DeriveOptions::max_armscye_to_chest`]
+/// of the chest girth.
+fn check_girths(
+    curves: &BTreeMap<CurveId, FeatureCurve>,
+    stature: f64,
+    opts: &DeriveOptions,
+) -> Result<(), FeatureError> {
+    let girth = |id: CurveId| curves.get(&id).map(|c| super::measure::girth_of(&c.polyline, c.plane.as_ref()));
+    use CurveId as C;
+    for id in [
+        C::NeckBase,
+        C::Chest,
+        C::Bust,
+        C::Underbust,
+        C::Waist,
+        C::Hip,
+        C::ThighLeft,
+        C::ThighRight,
+        C::KneeLeft,
+        C::KneeRight,
+        C::AnkleLeft,
+        C::AnkleRight,
+        C::ArmscyeLeft,
+        C::ArmscyeRight,
+    ] {
+        let Some(g) = girth(id) else { continue };
+        let max = opts.max_girth_to_stature * stature;
+        if g > max {
+            return Err(FeatureError::ImplausibleGirth {
+                curve: id,
+                girth_mm: g * MM_PER_M,
+                min_mm: 0.0,
+                max_mm: max * MM_PER_M,
+                reason: format!("at most {} × the stature", opts.max_girth_to_stature),
+            });
+        }
+    }
+    if let Some(chest) = girth(CurveId::Chest) {
+        for id in [CurveId::ArmscyeLeft, CurveId::ArmscyeRight] {
+            let Some(g) = girth(id) else { continue };
+            let max = opts.max_armscye_to_chest * chest;
+            if g > max {
+                return Err(FeatureError::ImplausibleGirth {
+                    curve: id,
+                    girth_mm: g * MM_PER_M,
+                    min_mm: 0.0,
+                    max_mm: max * MM_PER_M,
+                    reason: format!(
+                        "at most {} × the chest girth of {:.0} mm: the armscye section runs through the torso?",
+                        opts.max_armscye_to_chest,
+                        chest * MM_PER_M
+                    ),
+                });
+            }
+        }
+    }
+    Ok(())
 }
 
 fn given_curve(id: CurveId, given: &Polyline) -> Result<FeatureCurve, FeatureError> {

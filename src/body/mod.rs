@@ -2,6 +2,7 @@
 //! curves, feature points and local frames.
 
 pub mod derive;
+pub mod ease;
 pub mod feature;
 pub mod measure;
 pub mod vocab;

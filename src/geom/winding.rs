@@ -211,6 +211,8 @@ pub struct WindingTree {
     triangles: Vec<[u32; 3]>,
     /// Original face of each reordered triangle.
     faces: Vec<FaceId>,
+    /// Reordered index of each original face (the inverse of `faces`).
+    order: Vec<u32>,
     nodes: Vec<Node>,
     /// `β²` of the far-field criterion.
     beta_squared: f64,
@@ -243,12 +245,24 @@ impl WindingTree {
         let nodes = builder.nodes;
         let faces: Vec<FaceId> = items.iter().map(|it| FaceId(it.face)).collect();
         let triangles = faces.iter().map(|&f| mesh.triangles()[f.idx()].map(|v| v.0)).collect();
-        WindingTree { positions: mesh.positions().to_vec(), triangles, faces, nodes, beta_squared: beta * beta }
+        let mut order = vec![0u32; faces.len()];
+        for (i, f) in faces.iter().enumerate() {
+            order[f.idx()] = i as u32;
+        }
+        WindingTree { positions: mesh.positions().to_vec(), triangles, faces, order, nodes, beta_squared: beta * beta }
     }
 
     /// Number of triangles.
     pub fn face_count(&self) -> usize {
         self.triangles.len()
+    }
+
+    /// The corners of face `f` of the mesh the tree was built from.
+    ///
+    /// # Panics
+    /// If `f` is not a face of that mesh (ids come from this tree's queries).
+    pub fn face_corners(&self, f: FaceId) -> [DVec3; 3] {
+        self.corners(self.order[f.idx()] as usize)
     }
 
     /// Number of nodes of the hierarchy.
@@ -259,6 +273,34 @@ impl WindingTree {
     #[inline]
     fn corners(&self, i: usize) -> [DVec3; 3] {
         self.triangles[i].map(|v| self.positions[v as usize])
+    }
+
+    /// Calls `visit(face, corners)` for every triangle whose bounding box
+    /// overlaps the box `[lo, hi]` (closed), in tree order: the broad phase of
+    /// [`crate::geom::intersect::intersecting_pairs`].
+    pub fn faces_in_box(&self, lo: DVec3, hi: DVec3, mut visit: impl FnMut(FaceId, [DVec3; 3])) {
+        let overlaps = |a: DVec3, b: DVec3| a.cmple(hi).all() && b.cmpge(lo).all();
+        let mut stack = [0u32; STACK];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let node = &self.nodes[stack[top] as usize];
+            if !overlaps(node.box_min, node.box_max) {
+                continue;
+            }
+            if node.leaf {
+                for i in node.start as usize..node.end as usize {
+                    let c = self.corners(i);
+                    if overlaps(c[0].min(c[1]).min(c[2]), c[0].max(c[1]).max(c[2])) {
+                        visit(self.faces[i], c);
+                    }
+                }
+            } else {
+                stack[top] = node.child_or_solid_end + 1;
+                stack[top + 1] = node.child_or_solid_end;
+                top += 2;
+            }
+        }
     }
 
     /// Generalised winding number `w(p)` with the far-field expansion of
@@ -329,6 +371,21 @@ impl WindingTree {
     /// found is kept (deterministic). For a non-finite `p` the distance is
     /// NaN or infinite.
     pub fn closest_point(&self, p: DVec3) -> (DVec3, FaceId, f64) {
+        let (q, i, d) = self.closest_index(p);
+        (q, self.faces[i], d)
+    }
+
+    /// [`WindingTree::closest_point`] with the unit normal of the closest
+    /// triangle (counter-clockwise seen from outside: outward on a body) in
+    /// place of its id; the zero vector for a degenerate triangle.
+    pub fn closest_point_normal(&self, p: DVec3) -> (DVec3, DVec3, f64) {
+        let (q, i, d) = self.closest_index(p);
+        let [a, b, c] = self.corners(i);
+        (q, (b - a).cross(c - a).normalize_or_zero(), d)
+    }
+
+    /// Closest point, its triangle's index in tree order, and the distance.
+    fn closest_index(&self, p: DVec3) -> (DVec3, usize, f64) {
         let mut best_point = self.positions[self.triangles[0][0] as usize];
         let mut best_index = 0usize;
         let mut best_d2 = f64::INFINITY;
@@ -363,7 +420,7 @@ impl WindingTree {
                 top += 2;
             }
         }
-        (best_point, self.faces[best_index], best_d2.sqrt())
+        (best_point, best_index, best_d2.sqrt())
     }
 }
 

@@ -5,4 +5,5 @@ pub mod fit;
 pub mod fixtures;
 pub mod landmarks;
 pub mod model;
+pub mod population;
 pub mod size_chart;

@@ -26,14 +26,18 @@
 //! point on the body plus [`CollisionOptions::clearance_mm`] along the
 //! direction from the vertex to that point (outward). `O(V log F)`.
 //!
-//! Fixed vertices (nodes, profile and boundary vertices) are never moved.
-//! No failure modes: points outside every map are outside.
+//! Fixed vertices (nodes, profile and boundary vertices) are never moved by
+//! the fairing hook nor by [`settle_exact`]; [`Collider::settle_fixed`] moves
+//! those the exact test finds inside out to the smaller
+//! [`ClearOptions::fixed_clearance_mm`] (issue #13: the report counts every
+//! vertex). No failure modes: points outside every map are outside.
 
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use crate::collide::depth::{inside_with_margin, DepthMap};
 use crate::geom::winding::WindingTree;
+use crate::refine::clear::{push_out, ClearOptions, CoarseClearReport, SurfaceClearReport};
 
 /// Knobs of collision avoidance.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -65,6 +69,13 @@ pub struct CollisionReport {
     pub refused: usize,
     /// Vertices moved out by the exact final pass ([`settle_exact`]).
     pub settled: usize,
+    /// Fixed vertices (nodes, profile and boundary vertices) the exact final
+    /// pass found inside and moved out ([`Collider::settle_fixed`]).
+    pub fixed_settled: usize,
+    /// Template nodes and profile points moved out before refinement.
+    pub coarse: CoarseClearReport,
+    /// Garment triangles lifted off body triangles they crossed.
+    pub surface: SurfaceClearReport,
 }
 
 /// The hook state: the depth maps and the positions after the last sweep.
@@ -164,5 +175,16 @@ impl Collider<'_> {
     /// [`settle_exact`] with this collider's clearance, counted in its report.
     pub fn settle(&mut self, tree: &WindingTree, positions: &mut [DVec3], fixed: &[bool]) {
         self.report.settled += settle_exact(tree, positions, fixed, self.opts.clearance_mm);
+    }
+
+    /// The exact final pass for the `fixed` vertices: each one `tree` finds
+    /// inside goes out to [`ClearOptions::fixed_clearance_mm`]
+    /// ([`push_out`]), counted in this collider's report.
+    pub fn settle_fixed(&mut self, tree: &WindingTree, positions: &mut [DVec3], fixed: &[bool], opts: &ClearOptions) {
+        for (p, &f) in positions.iter_mut().zip(fixed) {
+            if f && tree.is_inside(*p) && push_out(tree, p, opts.fixed_clearance_mm * 1e-3, opts.max_tries).is_some() {
+                self.report.fixed_settled += 1;
+            }
+        }
     }
 }

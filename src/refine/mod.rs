@@ -1,5 +1,6 @@
 //! Refinement of the coarse garment mesh (seed 000 §5): modified
 //! variational subdivision with collision avoidance.
 
+pub mod clear;
 pub mod collision;
 pub mod subdivide;

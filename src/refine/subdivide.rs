@@ -271,6 +271,15 @@ pub struct LevelReport {
 }
 
 impl RefineMesh {
+    /// The mesh as a validated [`TriMesh`] (for measurements and exports).
+    ///
+    /// # Errors
+    /// [`crate::geom::mesh::MeshError`] if a position is not finite or a triangle is invalid.
+    pub fn to_tri_mesh(&self) -> Result<crate::geom::mesh::TriMesh, crate::geom::mesh::MeshError> {
+        let tris = self.triangles.iter().map(|t| t.map(crate::geom::mesh::VertexId)).collect();
+        crate::geom::mesh::TriMesh::new(self.positions.clone(), tris)
+    }
+
     /// The coarse mesh `M0` of a decoded template: all nodes fixed, every profile
     /// keyed `(min, max)` and oriented from the smaller id.
     ///

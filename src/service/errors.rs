@@ -121,6 +121,8 @@ fn feature_slug(e: &FeatureError) -> &'static str {
         FeatureError::NoSection { .. } => "body-no-section",
         FeatureError::CurvesDoNotCross { .. } => "body-curves-do-not-cross",
         FeatureError::DegenerateFrame { .. } => "body-degenerate-frame",
+        FeatureError::OffMidline { .. } => "body-landmark-off-midline",
+        FeatureError::ImplausibleGirth { .. } => "body-implausible-girth",
     }
 }
 
@@ -161,6 +163,7 @@ impl From<WorkError> for Problem {
                 let slug = match source {
                     PipelineError::Decode { .. } => "template-does-not-fit",
                     PipelineError::Refine { .. } => "refine-failed",
+                    PipelineError::Clear { .. } => "garment-cannot-clear-body",
                     PipelineError::Pattern { .. } => "pattern-failed",
                 };
                 Problem::unprocessable(slug, detail).field("templates")

@@ -17,18 +17,16 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 use std::time::Instant;
 
-use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use crate::body::derive::{derive_features, DeriveOptions, FeatureError, Landmarks};
+use crate::body::ease::{girth_ease, EaseOptions};
 use crate::body::feature::FeatureBody;
-use crate::body::measure::{measure, MeasureOptions, MeasurementId};
+use crate::body::measure::{measure, MeasureOptions};
 use crate::collide::cache::{BodyKey, Obstacle, ObstacleCache};
 use crate::collide::render::{GpuContext, RenderError, RenderOptions};
 use crate::geom::mesh::{TriMesh, VertexId};
-use crate::geom::plane::Plane;
-use crate::geom::slice::slice;
-use crate::geom::winding::{WindingOptions, WindingTree};
+use crate::geom::winding::{penetration_stats, WindingOptions, WindingTree};
 use crate::io::gltf::{read_mesh, write_glb, GlbAttribute, GltfError, GltfReadOptions};
 use crate::io::landmarks::{parse_landmarks, LandmarkFileError};
 use crate::mannequin::fit::{fit_size, FitError, FitOptions};
@@ -186,6 +184,8 @@ pub mod stage {
     pub const DECODE: &str = "decode";
     /// Subdivision with collision avoidance.
     pub const REFINE: &str = "refine";
+    /// Keeping every vertex and triangle of the garment outside the body.
+    pub const CLEAR: &str = "clear";
     /// Panels, flattening, pieces.
     pub const PATTERN: &str = "pattern";
     /// Writing SVG, DXF, GLB, JSON.
@@ -277,6 +277,7 @@ fn grade_body(
         })?;
         timer.add_ms(stage::DECODE, g.timings.decode_ms);
         timer.add_ms(stage::REFINE, g.timings.refine_ms);
+        timer.add_ms(stage::CLEAR, g.timings.clear_ms);
         timer.add_ms(stage::PATTERN, g.timings.pattern_ms);
         let start = Instant::now();
         let stem = format!("{}-{}", t.name, size);
@@ -296,7 +297,7 @@ fn grade_body(
             media_type: "application/json",
             bytes: serde_json::to_vec(&g.pattern).unwrap_or_default(),
         });
-        let (glb, fit) = garment_glb(&g, body, obstacle.as_deref())?;
+        let (glb, fit) = garment_glb(t, &g, body, obstacle.as_deref())?;
         out.push(Artefact { name: format!("{stem}.garment.glb"), media_type: "model/gltf-binary", bytes: glb });
         timer.add(stage::EXPORT, start);
         graded.push((t.name.clone(), g, fit));
@@ -307,6 +308,7 @@ fn grade_body(
 /// The garment as GLB with the ease (distance to the body, mm) and the
 /// panel index as vertex attributes, and the fit figures of the report.
 fn garment_glb(
+    t: &Template,
     g: &Graded,
     body: &FeatureBody,
     obstacle: Option<&Obstacle>,
@@ -325,42 +327,41 @@ fn garment_glb(
     sorted.sort_by(f64::total_cmp);
     let pick = |q: f64| sorted.get(((sorted.len().saturating_sub(1)) as f64 * q).round() as usize).copied();
     let inside = ease_mm.iter().filter(|&&e| e < 0.0).count();
+    let penetration = penetration_report(g, body, obstacle);
     let fit = serde_json::json!({
         "collision_checked": obstacle.is_some(),
         "distance_to_body_mm": {
             "min": pick(0.0), "p05": pick(0.05), "median": pick(0.5), "p95": pick(0.95), "max": pick(1.0),
         },
         "vertices_inside_body": inside,
-        "girth_ease_mm": girth_ease(body, &mesh),
+        "penetration": penetration,
+        "girth_ease": girth_ease(body, &mesh, t, &EaseOptions::default()),
     });
     Ok((glb, fit))
 }
 
-/// Garment girth − body girth at each body girth the garment spans: the
-/// garment's section by the girth's horizontal plane nearest the girth.
-fn girth_ease(body: &FeatureBody, garment: &TriMesh) -> BTreeMap<String, f64> {
-    let body_m = measure(body, &MeasureOptions::default());
-    let mut out = BTreeMap::new();
-    for &id in MeasurementId::ALL {
-        let (Some(curve), Some(&girth)) = (id.girth_curve(), body_m.get(&id)) else { continue };
-        let Some(c) = body.curves.get(&curve) else { continue };
-        let centre = c.polyline.centroid();
-        let Some(plane) = Plane::from_point_normal(centre, DVec3::Y) else { continue };
-        let best = slice(garment, &plane)
-            .into_iter()
-            .filter(|s| s.polyline.closed)
-            .map(|s| {
-                let d = s.polyline.centroid() - centre;
-                (DVec3::new(d.x, 0.0, d.z).length(), s.polyline.length())
-            })
-            .min_by(|a, b| a.0.total_cmp(&b.0));
-        if let Some((d, len)) = best {
-            if d < 0.1 {
-                out.insert(id.as_str().to_owned(), ((len - girth) * 1e3 * 10.0).round() / 10.0);
-            }
-        }
-    }
-    out
+/// Every garment vertex (fixed ones included) by the exact inside test, the
+/// deepest one with the feature point nearest to it, and the garment/body
+/// triangle pairs that intersect (the exact test of the pipeline's last
+/// surface-clearing round).
+fn penetration_report(g: &Graded, body: &FeatureBody, obstacle: Option<&Obstacle>) -> serde_json::Value {
+    let Some(ob) = obstacle else { return serde_json::Value::Null };
+    let stats = penetration_stats(&ob.tree, &g.mesh.positions);
+    let nearest = stats.deepest_index.and_then(|i| {
+        let p = g.mesh.positions[i];
+        body.points.iter().min_by(|a, b| a.1.position.distance(p).total_cmp(&b.1.position.distance(p))).map(|(id, q)| {
+            serde_json::json!({ "feature_point": id.as_str(), "distance_mm": (q.position.distance(p) * 1e4).round() / 10.0 })
+        })
+    });
+    serde_json::json!({
+        "vertices": stats.total,
+        "vertices_inside": stats.inside,
+        "deepest_mm": (stats.deepest_m * 1e5).round() / 100.0,
+        "deepest_near": nearest,
+        "garment_triangles": g.collision.surface.garment_triangles,
+        "intersecting_triangle_pairs": g.collision.surface.pairs_after,
+        "intersecting_triangle_pairs_before_clearing": g.collision.surface.pairs_before,
+    })
 }
 
 fn garment_report(name: &str, g: &Graded, fit: serde_json::Value) -> serde_json::Value {

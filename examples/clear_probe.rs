@@ -1,0 +1,98 @@
+//! Development probe (issue #13): grade the built-in templates on fixture
+//! bodies and print what the surface clearing leaves: the intersecting
+//! garment/body triangle pairs by height and side, the feature point nearest
+//! each, and whether the body mesh crosses itself there.
+//!
+//! `cargo run --release --example clear_probe -- [template] [body substring]`
+
+use std::path::Path;
+
+use glam::DVec3;
+use grade3d::body::derive::{derive_features, DeriveOptions};
+use grade3d::collide::cache::Obstacle;
+use grade3d::collide::render::{GpuContext, RenderOptions};
+use grade3d::geom::intersect::{intersecting_pairs, triangles_intersect};
+use grade3d::geom::mesh::FaceId;
+use grade3d::geom::winding::{WindingOptions, WindingTree};
+use grade3d::io::gltf::{read_mesh, GltfReadOptions};
+use grade3d::io::landmarks::parse_landmarks;
+use grade3d::pipeline::{grade, GradeOptions};
+use grade3d::template::library::builtin;
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let which = args.get(1).cloned().unwrap_or_default();
+    let only = args.get(2).cloned().unwrap_or_default();
+    let gpu = GpuContext::new().unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures");
+    let library = builtin().unwrap();
+    for sub in ["bodies", "astm"] {
+        let mut names: Vec<String> = std::fs::read_dir(root.join(sub))
+            .unwrap()
+            .filter_map(|e| e.ok()?.file_name().into_string().ok())
+            .filter_map(|n| n.strip_suffix(".glb").map(str::to_owned))
+            .collect();
+        names.sort();
+        for name in names.into_iter().filter(|n| n.contains(only.as_str())) {
+            let dir = root.join(sub);
+            let mesh = read_mesh(&std::fs::read(dir.join(format!("{name}.glb"))).unwrap(), &GltfReadOptions::default())
+                .unwrap();
+            let lm =
+                parse_landmarks(&std::fs::read_to_string(dir.join(format!("{name}.landmarks.json"))).unwrap()).unwrap();
+            let body = derive_features(mesh, &lm, &DeriveOptions::default()).unwrap();
+            let tree = WindingTree::new(&body.mesh, &WindingOptions::default());
+            // body self-intersections (non-adjacent faces)
+            let btris: Vec<[u32; 3]> = body.mesh.triangles().iter().map(|t| t.map(|v| v.0)).collect();
+            let mut selfx = Vec::new();
+            for (i, t) in btris.iter().enumerate() {
+                let s = t.map(|v| body.mesh.positions()[v as usize]);
+                let lo = s[0].min(s[1]).min(s[2]);
+                let hi = s[0].max(s[1]).max(s[2]);
+                tree.faces_in_box(lo, hi, |f, c| {
+                    let u = btris[f.idx()];
+                    if f.idx() > i && !u.iter().any(|v| t.contains(v)) && triangles_intersect(s, c) {
+                        selfx.push((s[0] + s[1] + s[2]) / 3.0);
+                    }
+                });
+            }
+            eprintln!("{sub}/{name}: body self-intersections {}", selfx.len());
+            let maps = gpu.render(&body.mesh, &RenderOptions::default()).unwrap();
+            let obstacle = Obstacle { maps, tree };
+            for t in library.iter().filter(|t| t.name.contains(which.as_str())) {
+                let g = grade(t, &body, Some(&obstacle), &name, &GradeOptions::default()).unwrap();
+                let s = g.collision.surface;
+                eprintln!("  {}: {s:?} clear {:.0} ms coarse {:?}", t.name, g.timings.clear_ms, g.collision.coarse);
+                let pairs = intersecting_pairs(&obstacle.tree, &g.mesh.positions, &g.mesh.triangles);
+                for p in pairs.iter().step_by((pairs.len() / 12).max(1)) {
+                    let c = obstacle.tree.face_corners(p.body);
+                    let m: DVec3 = (c[0] + c[1] + c[2]) / 3.0;
+                    let near = body
+                        .points
+                        .iter()
+                        .min_by(|a, b| a.1.position.distance(m).total_cmp(&b.1.position.distance(m)))
+                        .map(|(id, q)| format!("{id} {:.0} mm", q.position.distance(m) * 1e3))
+                        .unwrap();
+                    let nearest_self = selfx.iter().map(|q| q.distance(m)).fold(f64::INFINITY, f64::min);
+                    let gt = g.mesh.triangles[p.garment as usize];
+                    for v in gt {
+                        let q = g.mesh.positions[v as usize];
+                        eprintln!(
+                            "      v{v} {:.3?} depth {:.1} mm fixed {}",
+                            q.to_array(),
+                            obstacle.tree.signed_depth(q) * 1e3,
+                            g.mesh.fixed[v as usize]
+                        );
+                    }
+                    let fixed = gt.iter().filter(|v| g.mesh.fixed[**v as usize]).count();
+                    eprintln!(
+                        "    pair g{} b{}: at {:.3?} near {near}; body self-crossing {:.0} mm away; {fixed} fixed corners",
+                        p.garment,
+                        FaceId::idx(p.body),
+                        m.to_array(),
+                        nearest_self * 1e3
+                    );
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,348 @@
+//! The whole garment outside the body (issue #13; `DESIGN.md` §9, "Outside
+//! the body"): the template's own vertices before refinement, and the
+//! garment *surface* after it.
+//!
+//! **Before refinement** ([`clear_coarse`]; seed 002 §5's "outside the body"
+//! constraint on garment curves). Eq. (1) places every node at a fixed offset
+//! in its feature point's frame and Eq. (5) carries the profiles along; on a
+//! body unlike the reference one a node or a profile point can land inside
+//! the skin (at the waistband, neck, underarm). The refinement never moves
+//! them (they are fixed). So each node whose signed distance to the body is
+//! below `c_f` ([`ClearOptions::fixed_clearance_mm`]) goes to its closest
+//! body point `q` plus `c_f` outward,
+//!
+//! ```text
+//! p ← q + c_f · u,   u = (p − q)/|p − q| outside,  (q − p)/|p − q| inside,
+//!                    the outward normal of q's triangle when p = q,
+//! ```
+//!
+//! repeated from there (at most [`ClearOptions::max_tries`] times) where the
+//! step lands inside another part of the body (under the arm, between the
+//! thighs). Every profile then follows its end nodes by Eq. (5)
+//! ([`Profile::relocated`]), its interior points are moved out the same way,
+//! and its spline is solved again through them. `c_f` is small (1 mm) so
+//! that the eased girths the template declares are not widened where the
+//! draft already sits close: a waistband is snug by design.
+//!
+//! **After refinement** ([`clear_surface`]). Vertices 3 mm outside still let
+//! a convex part of the body (a hip bone, a knee, a shoulder) pass between
+//! them: triangles of 2–3 cm edges chord through it. Each round finds every
+//! garment triangle that crosses a body triangle by the exact test
+//! ([`crate::geom::intersect::intersecting_pairs`]) and lifts its three
+//! vertices along the garment's vertex normal by
+//!
+//! ```text
+//! lift = σ min(h + c, ℓ_max),   h = max over the crossed body triangle's corners of σ (v − a)·n_g
+//! σ = sign(n_b · n_g)
+//! ```
+//!
+//! (`n_g` the garment triangle's outward unit normal, `n_b` the body
+//! triangle's, `a` one of the garment triangle's corners, `c` the clearance,
+//! `ℓ_max` [`ClearOptions::max_lift_mm`]): the height by which the body
+//! pokes out through the garment's plane, plus the clearance. `σ = +1` for
+//! the body part the garment wraps (it faces the way the garment does);
+//! `σ = −1` for another part pressing on the garment from outside (an arm
+//! on a bodice's armhole), from which the garment gives way inward.
+//! A vertex shared by several such triangles takes the largest lift. Lifted
+//! vertices that land inside another body part are settled by the exact
+//! inside test. Rounds repeat until no pair is left or
+//! [`ClearOptions::max_rounds`] is reached; the report says how many pairs
+//! remain (the tests require none).
+//!
+//! **Failure modes**: a profile that cannot be solved again after its points
+//! moved ([`ProfileError`], named by edge in [`ClearError`]). No other: a
+//! vertex that cannot be moved out in `max_tries` steps stays where the last
+//! step left it and is counted by the report's measurements.
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use crate::geom::intersect::{count_pairs, intersecting_pairs};
+use crate::geom::winding::WindingTree;
+use crate::template::codec::CoarseMesh;
+use crate::template::profile::{Profile, ProfileError};
+
+/// Knobs of keeping the garment outside.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ClearOptions {
+    /// Least distance from the skin kept by template nodes, profile points
+    /// and the other fixed vertices, mm. Default 1 (cloth thickness: the
+    /// draft's own eased placement decides the rest).
+    pub fixed_clearance_mm: f64,
+    /// Steps of one vertex's move before giving up on it (another body part
+    /// in the way), count. Default 4.
+    pub max_tries: usize,
+    /// Rounds of lifting intersecting triangles, count. Default 12.
+    pub max_rounds: usize,
+    /// Largest lift of one vertex in one round, mm. Default 10.
+    pub max_lift_mm: f64,
+}
+
+impl Default for ClearOptions {
+    fn default() -> Self {
+        Self { fixed_clearance_mm: 1.0, max_tries: 4, max_rounds: 12, max_lift_mm: 10.0 }
+    }
+}
+
+/// Why clearing failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ClearError {
+    /// An edge's profile could not be solved again after clearing.
+    #[error("edge {edge}: profile after clearing the body: {source}")]
+    Profile {
+        /// The template edge.
+        edge: u32,
+        /// The cause.
+        source: ProfileError,
+    },
+}
+
+/// What [`clear_coarse`] moved.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct CoarseClearReport {
+    /// Template nodes moved out.
+    pub nodes_moved: usize,
+    /// Profile points moved out (interior points; end points are nodes).
+    pub profile_points_moved: usize,
+    /// Deepest node or profile point inside the body before, mm (0 if none).
+    pub deepest_before_mm: f64,
+}
+
+/// What [`clear_surface`] did.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct SurfaceClearReport {
+    /// Garment triangles in the test.
+    pub garment_triangles: usize,
+    /// Intersecting garment/body triangle pairs before lifting.
+    pub pairs_before: usize,
+    /// Garment triangles among them.
+    pub triangles_before: usize,
+    /// Lifting rounds run.
+    pub rounds: usize,
+    /// Vertex lifts made (a vertex lifted in two rounds counts twice).
+    pub lifts: usize,
+    /// Intersecting pairs left after the last round.
+    pub pairs_after: usize,
+}
+
+/// Moves `p` out of the body to `clearance` (m) from it, if it is inside or
+/// nearer (module docs). Returns the signed depth before (m, positive inside)
+/// when it moved.
+pub fn push_out(tree: &WindingTree, p: &mut DVec3, clearance: f64, tries: usize) -> Option<f64> {
+    let (q, normal, d) = tree.closest_point_normal(*p);
+    let inside = tree.is_inside(*p);
+    if !inside && d >= clearance {
+        return None;
+    }
+    let before = if inside { d } else { -d };
+    let (mut q, mut normal, mut d, mut inside) = (q, normal, d, inside);
+    for _ in 0..tries.max(1) {
+        let u = if d > 1e-12 && d.is_finite() {
+            if inside {
+                (q - *p) / d
+            } else {
+                (*p - q) / d
+            }
+        } else {
+            normal
+        };
+        if u == DVec3::ZERO {
+            break;
+        }
+        *p = q + u * clearance;
+        (q, normal, d) = tree.closest_point_normal(*p);
+        inside = tree.is_inside(*p);
+        // a closest point on another part means the step went too far: stop when clear
+        if !inside && d >= clearance * (1.0 - 1e-6) {
+            break;
+        }
+    }
+    Some(before)
+}
+
+/// Moves the nodes and profile points of a decoded template out of the body
+/// (module docs). `m` is changed in place.
+///
+/// # Errors
+/// [`ClearError::Profile`] naming the edge whose profile could not be solved again.
+pub fn clear_coarse(
+    m: &mut CoarseMesh,
+    edges: &[(u32, u32)],
+    tree: &WindingTree,
+    opts: &ClearOptions,
+) -> Result<CoarseClearReport, ClearError> {
+    let c = opts.fixed_clearance_mm * 1e-3;
+    let mut report = CoarseClearReport::default();
+    let mut moved = vec![false; m.positions.len()];
+    for (p, mv) in m.positions.iter_mut().zip(&mut moved) {
+        if let Some(depth) = push_out(tree, p, c, opts.max_tries) {
+            report.nodes_moved += 1;
+            report.deepest_before_mm = report.deepest_before_mm.max(depth * 1e3);
+            *mv = true;
+        }
+    }
+    for (i, (profile, &(s, e))) in m.profiles.iter_mut().zip(edges).enumerate() {
+        let Some(pr) = profile else { continue };
+        let edge = i as u32;
+        let (ps, pe) = (m.positions[s as usize], m.positions[e as usize]);
+        let mut changed = false;
+        let mut points: Vec<DVec3> = if moved[s as usize] || moved[e as usize] {
+            changed = true;
+            pr.relocated(ps, pe).map_err(|source| ClearError::Profile { edge, source })?.points().to_vec()
+        } else {
+            pr.points().to_vec()
+        };
+        let last = points.len().saturating_sub(1);
+        for q in points.iter_mut().take(last).skip(1) {
+            if let Some(depth) = push_out(tree, q, c, opts.max_tries) {
+                report.profile_points_moved += 1;
+                report.deepest_before_mm = report.deepest_before_mm.max(depth * 1e3);
+                changed = true;
+            }
+        }
+        if changed {
+            *pr = Profile::new(points).map_err(|source| ClearError::Profile { edge, source })?;
+        }
+    }
+    Ok(report)
+}
+
+/// Area-weighted vertex normals of a triangle list (zero for isolated vertices).
+fn vertex_normals(positions: &[DVec3], triangles: &[[u32; 3]]) -> Vec<DVec3> {
+    let mut n = vec![DVec3::ZERO; positions.len()];
+    for t in triangles {
+        let [a, b, c] = t.map(|v| positions[v as usize]);
+        let w = (b - a).cross(c - a);
+        for v in t {
+            n[*v as usize] += w;
+        }
+    }
+    n.iter().map(|v| v.normalize_or_zero()).collect()
+}
+
+/// Lifts garment triangles off the body until no garment triangle crosses a
+/// body triangle (module docs). `clearance_mm` is the free vertices'
+/// clearance; a lifted vertex that lands inside the body is moved out to it.
+pub fn clear_surface(
+    tree: &WindingTree,
+    positions: &mut [DVec3],
+    triangles: &[[u32; 3]],
+    clearance_mm: f64,
+    opts: &ClearOptions,
+) -> SurfaceClearReport {
+    let c = clearance_mm * 1e-3;
+    let max_lift = opts.max_lift_mm * 1e-3;
+    let mut report = SurfaceClearReport { garment_triangles: triangles.len(), ..Default::default() };
+    let mut pairs = intersecting_pairs(tree, positions, triangles);
+    (report.pairs_before, report.triangles_before) = count_pairs(&pairs);
+    let mut need = vec![0.0f64; positions.len()];
+    while !pairs.is_empty() && report.rounds < opts.max_rounds {
+        report.rounds += 1;
+        need.iter_mut().for_each(|x| *x = 0.0);
+        let normals = vertex_normals(positions, triangles);
+        for pair in &pairs {
+            let tri = triangles[pair.garment as usize];
+            let [a, b, cc] = tri.map(|v| positions[v as usize]);
+            let n = (b - a).cross(cc - a).normalize_or_zero();
+            let body = tree.face_corners(pair.body);
+            // the body part the garment wraps faces the way the garment does; another
+            // part pressing on it from outside (an arm on a bodice) faces against it,
+            // and the garment gives way inward
+            let nb = (body[1] - body[0]).cross(body[2] - body[0]);
+            let side = if nb.dot(n) < 0.0 { -1.0 } else { 1.0 };
+            let h = body.iter().map(|&v| side * (v - a).dot(n)).fold(0.0f64, f64::max);
+            let lift = side * (h + c).min(max_lift);
+            for v in tri {
+                let k = v as usize;
+                if lift.abs() > need[k].abs() {
+                    need[k] = lift;
+                }
+            }
+        }
+        for (i, p) in positions.iter_mut().enumerate() {
+            if need[i] != 0.0 {
+                *p += normals[i] * need[i];
+                report.lifts += 1;
+                if tree.is_inside(*p) {
+                    push_out(tree, p, c, opts.max_tries);
+                }
+            }
+        }
+        pairs = intersecting_pairs(tree, positions, triangles);
+    }
+    report.pairs_after = pairs.len();
+    report
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::mesh::TriMesh;
+    use crate::geom::winding::WindingOptions;
+
+    fn sphere(r: f64, splits: usize) -> TriMesh {
+        let mut m = TriMesh::icosahedron();
+        for _ in 0..splits {
+            m = crate::geom::simplify::split_midpoints(&m);
+        }
+        m.map_positions(|p| p.normalize() * r).unwrap()
+    }
+
+    #[test]
+    fn a_coarse_shell_around_a_fine_sphere_is_lifted_clear() {
+        // a coarse icosahedral shell whose vertices are all 3 mm outside a fine sphere:
+        // its flat faces chord through the sphere (poke-through between vertices)
+        let body = sphere(0.1, 4);
+        let tree = WindingTree::new(&body, &WindingOptions::default());
+        let shell = sphere(0.103, 0);
+        let tris: Vec<[u32; 3]> = shell.triangles().iter().map(|t| t.map(|v| v.0)).collect();
+        let mut pos = shell.positions().to_vec();
+        assert!(pos.iter().all(|p| !tree.is_inside(*p)));
+        let report = clear_surface(&tree, &mut pos, &tris, 3.0, &ClearOptions::default());
+        assert!(report.pairs_before > 0, "{report:?}");
+        assert_eq!(report.triangles_before, 20, "every face of the shell chords through: {report:?}");
+        assert_eq!(report.pairs_after, 0, "{report:?}");
+        assert!(intersecting_pairs(&tree, &pos, &tris).is_empty());
+        // the icosahedron's inradius must reach the sphere: ≥ 0.1 m / 0.7947 (inradius/circumradius)
+        let inradius = pos[0].length() * 0.794_654_5;
+        assert!(inradius >= 0.1, "inradius {inradius}");
+        // lifted evenly: every vertex moved the same amount along its normal (symmetry)
+        let r: Vec<f64> = pos.iter().map(|p| p.length()).collect();
+        let spread = r.iter().cloned().fold(f64::MIN, f64::max) - r.iter().cloned().fold(f64::MAX, f64::min);
+        assert!(spread < 1e-9, "spread {spread}");
+    }
+
+    #[test]
+    fn nodes_and_profile_points_inside_are_moved_out_to_the_fixed_clearance() {
+        let body = sphere(0.1, 4);
+        let tree = WindingTree::new(&body, &WindingOptions::default());
+        // two nodes: one 5 mm inside, one 20 mm outside, with an arc profile dipping inside
+        let a = DVec3::new(0.095, 0.0, 0.0);
+        let b = DVec3::new(0.0, 0.12, 0.0);
+        let arc: Vec<DVec3> =
+            (0..=6).map(|k| a.lerp(b, k as f64 / 6.0).normalize() * (0.09 + 0.03 * k as f64 / 6.0)).collect();
+        let mut arc = arc;
+        arc[0] = a;
+        arc[6] = b;
+        let mut m = CoarseMesh {
+            positions: vec![a, b, DVec3::new(0.0, 0.0, 0.2)],
+            triangles: vec![[0, 1, 2]],
+            profiles: vec![Some(Profile::new(arc).unwrap()), None, None],
+        };
+        let edges = [(0, 1), (1, 2), (2, 0)];
+        let report = clear_coarse(&mut m, &edges, &tree, &ClearOptions::default()).unwrap();
+        assert_eq!(report.nodes_moved, 1, "{report:?}");
+        assert!(report.profile_points_moved >= 1, "{report:?}");
+        assert!((report.deepest_before_mm - 5.0).abs() < 0.5, "{report:?}");
+        let d = |p: DVec3| -tree.signed_depth(p);
+        assert!((d(m.positions[0]) - 1e-3).abs() < 1e-6, "node at {} mm", d(m.positions[0]) * 1e3);
+        assert_eq!(m.positions[1], b, "the outside node stays");
+        let pr = m.profiles[0].as_ref().unwrap();
+        assert_eq!(pr.start(), m.positions[0]);
+        assert_eq!(pr.end(), b);
+        for q in pr.points() {
+            assert!(d(*q) >= 1e-3 - 1e-6, "profile point {} mm from the skin", d(*q) * 1e3);
+        }
+    }
+}
