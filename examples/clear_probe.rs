@@ -26,7 +26,19 @@ fn main() {
     let gpu = GpuContext::new().unwrap();
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures");
     let library = builtin().unwrap();
+    let mut jobs: Vec<(String, grade3d::geom::mesh::TriMesh, grade3d::body::derive::Landmarks)> = Vec::new();
+    if let Some(i) = only.strip_prefix("pop").and_then(|n| n.parse::<usize>().ok()) {
+        // a body of issue #13's population (tests/population.rs: seed 13)
+        let model = grade3d::mannequin::model::BodyModel::embedded().unwrap();
+        let b = &grade3d::mannequin::population::sample_population(40, 13)[i];
+        let mesh = model.build(&b.params).unwrap();
+        let lm = grade3d::mannequin::landmarks::hm08_landmarks(model, &mesh, &Default::default()).unwrap();
+        jobs.push((b.name.clone(), mesh, lm));
+    }
     for sub in ["bodies", "astm"] {
+        if !jobs.is_empty() {
+            break;
+        }
         let mut names: Vec<String> = std::fs::read_dir(root.join(sub))
             .unwrap()
             .filter_map(|e| e.ok()?.file_name().into_string().ok())
@@ -39,6 +51,12 @@ fn main() {
                 .unwrap();
             let lm =
                 parse_landmarks(&std::fs::read_to_string(dir.join(format!("{name}.landmarks.json"))).unwrap()).unwrap();
+            jobs.push((format!("{sub}/{name}"), mesh, lm));
+        }
+    }
+    {
+        for (name, mesh, lm) in jobs {
+            let sub = "";
             let body = derive_features(mesh, &lm, &DeriveOptions::default()).unwrap();
             let tree = WindingTree::new(&body.mesh, &WindingOptions::default());
             // body self-intersections (non-adjacent faces)

@@ -4,7 +4,8 @@
 //!
 //! `cargo run --release --example strain_probe -- trousers '{"thigh_ease_mm":90}'`
 //! (`AUTO='{"candidates":8}'` overrides the found-dart search's options,
-//! `FLAT='{"hem_weight":0.5}'` the flattening's;
+//! `FLAT='{"hem_weight":0.5}'` the flattening's, `CLEAR='{"max_rounds":0}'` the
+//! surface clearing's;
 //! `[n]` after a piece is how many darts the search added).
 
 use std::path::Path;
@@ -54,6 +55,9 @@ fn main() {
             let mut go = GradeOptions::default();
             if let Ok(f) = std::env::var("FLAT") {
                 go.pattern.flatten = serde_json::from_str(&f).unwrap();
+            }
+            if let Ok(c) = std::env::var("CLEAR") {
+                go.clear = serde_json::from_str(&c).unwrap();
             }
             if let Ok(a) = std::env::var("AUTO") {
                 go.pattern.auto_darts = serde_json::from_str(&a).unwrap();

@@ -27,6 +27,7 @@ use crate::refine::collision::{Collider, CollisionOptions, CollisionReport};
 use crate::refine::subdivide::{refine, relax_tangentially, LevelReport, RefineError, RefineMesh, RefineOptions};
 use crate::template::codec::{decode, CodecError};
 use crate::template::format::Template;
+use crate::template::girth::expected_ease;
 
 /// Knobs of one grade. Levels, clearance, seam allowance and relocation
 /// default to the template's `defaults` where the field is `None`.
@@ -93,6 +94,9 @@ pub struct Graded {
     pub pattern: GarmentPattern,
     /// Wall time per stage.
     pub timings: StageTimings,
+    /// The ease each declared girth should have, mm
+    /// ([`crate::template::girth::expected_ease`]).
+    pub expected_ease_mm: std::collections::BTreeMap<String, f64>,
 }
 
 fn ms(since: Instant) -> f64 {
@@ -119,6 +123,7 @@ pub fn grade(
 
     let start = Instant::now();
     let mut m0 = decode(t, body, t.defaults.relocation)?;
+    let expected_ease_mm = expected_ease(t, body, &m0);
     let edges: Vec<(u32, u32)> = t.edges.iter().map(|e| (e.start, e.end)).collect();
     let clear_start = Instant::now();
     let coarse_clear = match obstacle {
@@ -127,6 +132,7 @@ pub fn grade(
     };
     let coarse_ms = ms(clear_start);
     let mut surface_ms = 0.0;
+    let mut unlifted = None;
     let coarse = RefineMesh::from_coarse(&m0, &edges)?;
     let decode_ms = ms(start) - coarse_ms;
 
@@ -140,6 +146,7 @@ pub fn grade(
             collider.settle_fixed(&ob.tree, &mut mesh.positions, &mesh.fixed, &opts.clear);
             let mut report = collider.report;
             report.coarse = coarse_clear;
+            unlifted = opts.clear.pattern_before_lift.then(|| mesh.positions.clone());
             let surface_start = Instant::now();
             report.surface = clear_surface(&ob.tree, &mut mesh.positions, &mesh.triangles, clearance_mm, &opts.clear);
             surface_ms = ms(surface_start);
@@ -154,13 +161,15 @@ pub fn grade(
     let refine_ms = ms(start);
 
     let start = Instant::now();
-    let pattern = pattern(t, &mesh.positions, &mesh.triangles, levels, size, &pattern_opts)?;
+    let cut_from = unlifted.as_deref().unwrap_or(&mesh.positions);
+    let pattern = pattern(t, cut_from, &mesh.triangles, levels, size, &pattern_opts)?;
     let pattern_ms = ms(start);
     Ok(Graded {
         mesh,
         levels: level_reports,
         collision,
         pattern,
+        expected_ease_mm,
         timings: StageTimings {
             decode_ms,
             refine_ms: refine_ms - surface_ms,

@@ -9,6 +9,9 @@
 //!    vocabulary's curve rules need is present and finite.
 //! 2. **Snap** each landmark to its closest surface point; one farther than
 //!    [`DeriveOptions::max_landmark_offset_mm`] is rejected.
+//!    **Plausibility**: every centre-front/back landmark given lies within
+//!    [`DeriveOptions::max_midline_offset_mm`] of the mid-sagittal plane of
+//!    the left/right landmark pairs ([`FeatureError::OffMidline`]).
 //! 3. **Curves** (unless given as polylines): each curve by its rule in
 //!    [`vocab::CURVES`] — a *section* is a plane section of the mesh
 //!    ([`crate::geom::slice`]), the loop chosen as the one enclosing the
@@ -16,6 +19,10 @@
 //!    them (limbs), oriented anticlockwise about the rule's axis; a *path*
 //!    joins consecutive landmarks `p_i → p_{i+1}` by the shorter arc of the
 //!    section by the plane through `p_i` with normal `(p_{i+1} − p_i) × d`.
+//!    **Plausibility**: each girth at most [`DeriveOptions::max_girth_to_stature`]
+//!    of the stature, each armscye at most [`DeriveOptions::max_armscye_to_chest`]
+//!    of the chest girth ([`FeatureError::ImplausibleGirth`]: a section that
+//!    runs through the torso).
 //! 4. **Points**: each feature point is the crossing of its two curves
 //!    nearest its landmark (closest approach of the polylines), snapped to
 //!    the surface. Crossings farther apart than

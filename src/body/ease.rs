@@ -19,6 +19,13 @@
 //! ease = tape(garment ∩ P) − tape(body curve)
 //! ```
 //!
+//! Where the girth is an *opening* of the garment (every template edge
+//! around it lies on the template's boundary: a waistband, a neckline), the
+//! garment girth is instead the tape length of the garment's boundary loop
+//! around the body curve, in the same plane. For a leg girth, a section
+//! around the other leg's girth too (both legs, above a crotch) is not the
+//! garment at that girth.
+//!
 //! A template's ease entries name girths by their curve (`"hip"` is
 //! `hip_girth`); entries that are not girths (`"hem_flare_radial"`,
 //! `"crotch_drop"`) are not measured. A girth whose plane does not cut the
@@ -27,16 +34,20 @@
 //!
 //! No failure modes: what cannot be measured is left out.
 
+use std::collections::BTreeMap;
+
 use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
 use crate::body::feature::FeatureBody;
 use crate::body::measure::{girth_of, MeasurementId};
+use crate::body::vocab::{point_def, CurveId};
 use crate::geom::mesh::TriMesh;
 use crate::geom::plane::Plane;
-use crate::geom::polyline::tape_length;
+use crate::geom::polyline::{tape_length, Polyline};
 use crate::geom::slice::slice;
 use crate::template::format::Template;
+use crate::template::girth::ring_curves;
 
 /// Knobs of the ease measurement.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -67,8 +78,87 @@ pub struct GirthEase {
     pub measured_mm: f64,
     /// What the template declares, mm.
     pub declared_mm: f64,
-    /// What the garment should have here, mm: the declared ease.
+    /// What the garment should have here, mm: the declared ease, or more
+    /// where the template's shape rules add ease on purpose
+    /// ([`crate::template::girth::expected_ease`]).
     pub expected_mm: f64,
+}
+
+/// The girth of the other side at the same level, for a leg or arm girth.
+fn mirror(id: MeasurementId) -> Option<CurveId> {
+    match id {
+        MeasurementId::ThighGirth => Some(CurveId::ThighRight),
+        MeasurementId::KneeGirth => Some(CurveId::KneeRight),
+        MeasurementId::AnkleGirth => Some(CurveId::AnkleRight),
+        MeasurementId::ArmscyeGirth => Some(CurveId::ArmscyeRight),
+        _ => None,
+    }
+}
+
+/// Whether girth `name` is an opening of the garment: every template edge
+/// between two nodes tied to feature points on its curves lies on the
+/// template's boundary (a waistband, a neckline), rather than around the
+/// body inside the garment.
+fn is_opening(t: &Template, name: &str) -> bool {
+    let curves = ring_curves(name);
+    let on = |node: u32| {
+        t.nodes.get(node as usize).is_some_and(|n| {
+            let d = point_def(n.point);
+            curves.contains(&d.f1) || curves.contains(&d.f2)
+        })
+    };
+    let mut uses: BTreeMap<(u32, u32), usize> = BTreeMap::new();
+    for f in 0..t.faces.len() {
+        let v = t.face_nodes(f);
+        for k in 0..3 {
+            let (a, b) = (v[k], v[(k + 1) % 3]);
+            *uses.entry((a.min(b), a.max(b))).or_default() += 1;
+        }
+    }
+    let ring: Vec<usize> = t
+        .edges
+        .iter()
+        .filter(|e| on(e.start) && on(e.end))
+        .map(|e| uses.get(&(e.start.min(e.end), e.start.max(e.end))).copied().unwrap_or(0))
+        .collect();
+    !ring.is_empty() && ring.iter().all(|&u| u == 1)
+}
+
+/// The boundary loops of a mesh (edges with one triangle, chained).
+fn boundary_loops(mesh: &TriMesh) -> Vec<Polyline> {
+    let mut count: BTreeMap<(u32, u32), usize> = BTreeMap::new();
+    for t in mesh.triangles() {
+        for k in 0..3 {
+            let (a, b) = (t[k].0, t[(k + 1) % 3].0);
+            *count.entry((a.min(b), a.max(b))).or_default() += 1;
+        }
+    }
+    // directed boundary edges as the triangles run them
+    let mut next: BTreeMap<u32, u32> = BTreeMap::new();
+    for t in mesh.triangles() {
+        for k in 0..3 {
+            let (a, b) = (t[k].0, t[(k + 1) % 3].0);
+            if count[&(a.min(b), a.max(b))] == 1 {
+                next.insert(a, b);
+            }
+        }
+    }
+    let mut loops = Vec::new();
+    while let Some((&start, _)) = next.iter().next() {
+        let mut ids = vec![start];
+        let mut at = start;
+        while let Some(n) = next.remove(&at) {
+            if n == start {
+                break;
+            }
+            ids.push(n);
+            at = n;
+        }
+        if ids.len() >= 3 {
+            loops.push(Polyline::new(ids.iter().map(|&v| mesh.positions()[v as usize]).collect(), true));
+        }
+    }
+    loops
 }
 
 /// Signed area of a closed polygon.
@@ -78,8 +168,16 @@ fn area(poly: &[DVec2]) -> f64 {
 }
 
 /// The ease of `garment` on `body` at every girth `t` declares one for and
-/// the garment covers (module docs), in the template's order of names.
-pub fn girth_ease(body: &FeatureBody, garment: &TriMesh, t: &Template, opts: &EaseOptions) -> Vec<GirthEase> {
+/// the garment covers (module docs), in the template's order of names;
+/// `expected` the ease each should have (`Graded::expected_ease_mm`),
+/// the declared one where absent.
+pub fn girth_ease(
+    body: &FeatureBody,
+    garment: &TriMesh,
+    t: &Template,
+    expected: &BTreeMap<String, f64>,
+    opts: &EaseOptions,
+) -> Vec<GirthEase> {
     let round = |x: f64| if opts.round_mm > 0.0 { (x / opts.round_mm).round() * opts.round_mm } else { x };
     let mut out = Vec::new();
     for (name, &declared) in &t.ease_mm {
@@ -88,11 +186,23 @@ pub fn girth_ease(body: &FeatureBody, garment: &TriMesh, t: &Template, opts: &Ea
         let Some(plane) = curve.plane.or_else(|| Plane::fit(&curve.polyline.points)) else { continue };
         let body_m = girth_of(&curve.polyline, Some(&plane));
         let centre: DVec3 = curve.polyline.centroid();
-        let best = slice(garment, &plane)
-            .into_iter()
-            .filter(|s| s.polyline.closed && s.polyline.contains_projected(&plane, centre))
-            .map(|s| (area(&s.polyline.to_plane_2d(&plane)).abs(), s.polyline))
-            .min_by(|a, b| a.0.total_cmp(&b.0));
+        // the other leg's girth at the same level must not be inside the loop
+        let other: Option<DVec3> = mirror(id).and_then(|c| body.curves.get(&c)).map(|c| c.polyline.centroid());
+        let best = if is_opening(t, name) {
+            // an opening (a waistband, a neckline): the garment's boundary loop around the girth
+            boundary_loops(garment)
+                .into_iter()
+                .filter(|l| l.contains_projected(&plane, centre))
+                .map(|l| (l.centroid().distance(centre), l))
+                .min_by(|a, b| a.0.total_cmp(&b.0))
+        } else {
+            slice(garment, &plane)
+                .into_iter()
+                .filter(|s| s.polyline.closed && s.polyline.contains_projected(&plane, centre))
+                .filter(|s| other.is_none_or(|o| !s.polyline.contains_projected(&plane, o)))
+                .map(|s| (area(&s.polyline.to_plane_2d(&plane)).abs(), s.polyline))
+                .min_by(|a, b| a.0.total_cmp(&b.0))
+        };
         let Some((_, loop_)) = best else { continue };
         let garment_m = tape_length(&[&loop_], &plane);
         out.push(GirthEase {
@@ -102,7 +212,7 @@ pub fn girth_ease(body: &FeatureBody, garment: &TriMesh, t: &Template, opts: &Ea
             garment_mm: round(garment_m * 1e3),
             measured_mm: round((garment_m - body_m) * 1e3),
             declared_mm: declared,
-            expected_mm: declared,
+            expected_mm: expected.get(name).copied().unwrap_or(declared),
         });
     }
     out

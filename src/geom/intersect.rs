@@ -40,7 +40,7 @@
 use glam::DVec3;
 use robust::{orient3d, Coord3D};
 
-use crate::geom::mesh::FaceId;
+use crate::geom::mesh::{FaceId, TriMesh};
 use crate::geom::winding::WindingTree;
 
 #[inline]
@@ -107,6 +107,29 @@ pub fn intersecting_pairs(tree: &WindingTree, positions: &[DVec3], triangles: &[
     out
 }
 
+/// Pairs of triangles of one mesh that cross each other without sharing a
+/// vertex: where two parts of a body are pressed into each other (thighs,
+/// an arm on the torso), its surface crosses itself and no garment surface
+/// can pass between them. `(a, b)` with `a < b`, ascending.
+pub fn self_intersections(tree: &WindingTree, mesh: &TriMesh) -> Vec<(FaceId, FaceId)> {
+    let mut out = Vec::new();
+    for (i, t) in mesh.triangles().iter().enumerate() {
+        let s = mesh.corners(FaceId(i as u32));
+        let lo = s[0].min(s[1]).min(s[2]);
+        let hi = s[0].max(s[1]).max(s[2]);
+        let mut found = Vec::new();
+        tree.faces_in_box(lo, hi, |f, c| {
+            let u = mesh.triangles()[f.idx()];
+            if f.idx() > i && !u.iter().any(|v| t.contains(v)) && triangles_intersect(s, c) {
+                found.push(f);
+            }
+        });
+        found.sort_unstable_by_key(|f| f.0);
+        out.extend(found.into_iter().map(|f| (FaceId(i as u32), f)));
+    }
+    out
+}
+
 /// Counts of [`intersecting_pairs`]: pairs, and distinct garment triangles.
 pub fn count_pairs(pairs: &[IntersectingPair]) -> (usize, usize) {
     let mut g: Vec<u32> = pairs.iter().map(|p| p.garment).collect();
@@ -117,7 +140,7 @@ pub fn count_pairs(pairs: &[IntersectingPair]) -> (usize, usize) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geom::mesh::{TriMesh, VertexId};
+    use crate::geom::mesh::VertexId;
     use crate::geom::winding::WindingOptions;
     use glam::DQuat;
     use proptest::prelude::*;

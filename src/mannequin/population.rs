@@ -7,8 +7,8 @@
 //! things first — the lightest and heaviest, shortest and tallest, least and
 //! most muscled women and men, at 25 and 90 years, with ideal and
 //! uncommon proportions — each with a pure ethnic mix in turn. The rest
-//! are drawn uniformly from the adult range of every macro (age from 18
-//! years: MakeHuman's age 0.34; the others on [0, 1]) with ethnic weights
+//! are drawn uniformly from the range of every macro the embedded model
+//! takes (age 25–90 years: [`ADULT_AGE`]..1; the others on [0, 1]) with ethnic weights
 //! uniform on the simplex. SplitMix64 (Steele, Lea & Flood 2014) drives it:
 //! the same seed gives the same bodies on every machine.
 //!
@@ -24,8 +24,9 @@ use super::model::{MacroParams, MannequinParams};
 use crate::geom::mesh::TriMesh;
 use crate::geom::simplify::{remesh_unrelated, SimplifyError, SimplifyOptions};
 
-/// MakeHuman's age macro at 18 years (0.1875 is 11 years, 0.5 is 25).
-pub const ADULT_AGE: f64 = 0.1875 + 0.3125 * 7.0 / 14.0;
+/// The youngest age the embedded model takes: MakeHuman's age macro 0.5,
+/// 25 years (its targets below that are not embedded; 1.0 is 90 years).
+pub const ADULT_AGE: f64 = 0.5;
 
 /// How many of the first bodies are the planted extremes.
 pub const CORNERS: usize = 10;

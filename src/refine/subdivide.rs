@@ -1249,6 +1249,7 @@ mod tests {
             positions: m.positions.clone(),
             triangles: vec![[0, 1, 2]],
             profiles: vec![Some(profile.clone()), None, None],
+            hung: vec![],
         };
         assert_eq!(
             RefineMesh::from_coarse(&coarse, &[(0, 1)]).unwrap_err(),

@@ -335,7 +335,7 @@ fn garment_glb(
         },
         "vertices_inside_body": inside,
         "penetration": penetration,
-        "girth_ease": girth_ease(body, &mesh, t, &EaseOptions::default()),
+        "girth_ease": girth_ease(body, &mesh, t, &g.expected_ease_mm, &EaseOptions::default()),
     });
     Ok((glb, fit))
 }

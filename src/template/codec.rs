@@ -13,7 +13,11 @@
 //! **Decode.** On a body `H'`: `p'(v̄_i) = p'(q_j) + α n' + β t'(f1) + γ t'(f2)`
 //! (Eq. 1), or `p'(q_j) + d` (Eq. 2, for comparison: it does not follow
 //! the body's orientation, seed 000 Fig. 6). Profiles follow their end
-//! nodes by Eq. (5) ([`Profile::relocated`]).
+//! nodes by Eq. (5) ([`Profile::relocated`]); then the profiles of ring
+//! edges around a girth the template declares an ease for are sampled again
+//! along the body's own eased girth ([`super::girth::refit_rings`]), as
+//! authoring sampled them on the reference body, so that the declared ease
+//! holds on every body.
 //!
 //! Failure modes: a node tied to a feature point the body lacks, a
 //! singular frame at encode time, a profile that cannot be built — each a
@@ -28,6 +32,7 @@ use super::format::{
     Dart, Edge, Face, GradingDefaults, GrainLine, Hang, Node, Notch, Panel, Relocation, Seam, Template, TemplateError,
     SCHEMA_ID, SCHEMA_VERSION,
 };
+use super::girth::refit_rings;
 use super::profile::{Profile, ProfileError};
 use crate::body::feature::FeatureBody;
 use crate::body::vocab::{PointId, VOCABULARY_VERSION};
@@ -310,6 +315,8 @@ pub struct CoarseMesh {
     /// The profile of every edge of the template's edge table, if any,
     /// oriented from the edge's start node to its end node.
     pub profiles: Vec<Option<Profile>>,
+    /// Nodes a hang moved (the template's `hangs`).
+    pub hung: Vec<u32>,
 }
 
 /// Decodes a template onto a feature human model.
@@ -323,7 +330,7 @@ pub fn decode(t: &Template, body: &FeatureBody, relocation: Relocation) -> Resul
         };
         positions.push(p);
     }
-    hang(&t.hangs, body, &mut positions);
+    let hung = hang(&t.hangs, body, &mut positions);
     let triangles = (0..t.faces.len()).map(|f| t.face_nodes(f)).collect();
     let mut profiles = Vec::with_capacity(t.edges.len());
     for (i, e) in t.edges.iter().enumerate() {
@@ -339,5 +346,8 @@ pub fn decode(t: &Template, body: &FeatureBody, relocation: Relocation) -> Resul
             .map_err(|source| CodecError::Profile { edge, source })?;
         profiles.push(Some(moved));
     }
-    Ok(CoarseMesh { positions, triangles, profiles })
+    // ring edges follow the body's eased girth, as on the reference body (ease as declared)
+    refit_rings(t, body, &positions, &mut profiles, &hung)
+        .map_err(|(edge, source)| CodecError::Profile { edge, source })?;
+    Ok(CoarseMesh { positions, triangles, profiles, hung })
 }

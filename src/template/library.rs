@@ -20,9 +20,11 @@ use serde::{Deserialize, Serialize};
 
 use super::codec::{encode, CodecError, Draft, DraftPanel, DraftSeam};
 use super::format::{Hang, Template, TemplateError};
+use super::girth;
 use crate::body::derive::{derive_features, DeriveOptions, FeatureError};
 use crate::body::feature::FeatureBody;
 use crate::body::vocab::{CurveId, PointId};
+use crate::geom::plane::Plane;
 use crate::geom::polyline::Polyline;
 use crate::mannequin::landmarks::{hm08_landmarks, LandmarkError};
 use crate::mannequin::model::{BodyModel, MannequinError, MannequinParams};
@@ -137,6 +139,8 @@ struct Ring {
     curve: Polyline,
     params: Vec<f64>,
     radial: f64,
+    /// The plane the ring is eased in (the girth's: [`girth::girth_plane`]).
+    plane: Plane,
 }
 
 /// Incremental construction of a [`Draft`] on the reference body.
@@ -183,7 +187,8 @@ impl<'a> Builder<'a> {
         ease_mm: f64,
         through: Option<(usize, u32)>,
     ) -> Result<Ring, AuthorError> {
-        let loop_ = bridged(self.curve(curve)?);
+        let plane = girth::girth_plane(self.body, curve).ok_or_else(|| AuthorError::Missing(curve.to_string()))?;
+        let loop_ = girth::bridged(self.curve(curve)?, &plane);
         let mut params = Vec::with_capacity(points.len());
         for id in points {
             let p = self.point(*id)?;
@@ -196,10 +201,10 @@ impl<'a> Builder<'a> {
             .enumerate()
             .map(|(k, (&t, &tie))| match through {
                 Some((at, node)) if at == k => node,
-                _ => self.node(eased(&loop_, t, radial), Some(tie)),
+                _ => self.node(girth::eased(&loop_, t, radial, &plane), Some(tie)),
             })
             .collect();
-        let ring = Ring { nodes, curve: loop_, params, radial };
+        let ring = Ring { nodes, curve: loop_, params, radial, plane };
         for i in 0..ring.nodes.len() {
             let j = (i + 1) % ring.nodes.len();
             let mut pts = self.ring_arc(&ring, ring.params[i], ring.params[j]);
@@ -224,7 +229,9 @@ impl<'a> Builder<'a> {
         let total = ring.curve.length();
         let d = (s1 - s0).rem_euclid(total);
         let n = self.profile_points;
-        (0..n).map(|k| eased(&ring.curve, s0 + d * k as f64 / (n - 1) as f64, ring.radial)).collect()
+        (0..n)
+            .map(|k| girth::eased(&ring.curve, s0 + d * k as f64 / (n - 1) as f64, ring.radial, &ring.plane))
+            .collect()
     }
 
     /// A profile along a feature line between the nodes `a` and `b`,
@@ -400,54 +407,6 @@ fn outer_hull(line: &Polyline, s0: f64, s1: f64, interior: DVec3) -> Polyline {
 
 /// A point of a girth at arc length `s`, moved outwards horizontally (away
 /// from the girth's centroid) by `radial`.
-/// The girth with its concavities bridged, as a tape measure (and cloth)
-/// bridges them: every point inside the convex hull of the girth's
-/// horizontal projection is moved radially (from the centroid) out to the
-/// hull; heights are kept. Garments do not follow the gluteal cleft or the
-/// cleavage, and a ring that did would fold the cloth there.
-fn bridged(loop_: &Polyline) -> Polyline {
-    let c = loop_.centroid();
-    let flat: Vec<DVec2> = loop_.points.iter().map(|p| DVec2::new(p.x - c.x, p.z - c.z)).collect();
-    let hull = crate::geom::polyline::convex_hull_2d(&flat);
-    let m = hull.len();
-    if m < 3 {
-        return loop_.clone();
-    }
-    let points = loop_
-        .points
-        .iter()
-        .zip(&flat)
-        .map(|(p, q)| {
-            let dir = q.normalize_or_zero();
-            // the ray from the centroid through q leaves the hull at the largest t
-            // with t·dir on an edge
-            let mut reach = q.length();
-            for i in 0..m {
-                let (a, b) = (hull[i], hull[(i + 1) % m]);
-                let e = b - a;
-                let den = dir.perp_dot(e);
-                if den.abs() <= f64::EPSILON {
-                    continue;
-                }
-                let t = a.perp_dot(e) / den;
-                let u = a.perp_dot(dir) / den;
-                if t > 0.0 && (-1e-12..=1.0 + 1e-12).contains(&u) {
-                    reach = reach.max(t);
-                }
-            }
-            let out = dir * reach;
-            DVec3::new(c.x + out.x, p.y, c.z + out.y)
-        })
-        .collect();
-    Polyline::new(points, loop_.closed)
-}
-
-fn eased(loop_: &Polyline, s: f64, radial: f64) -> DVec3 {
-    let p = loop_.point_at(s);
-    let c = loop_.centroid();
-    let out = DVec3::new(p.x - c.x, 0.0, p.z - c.z).normalize_or_zero();
-    p + out * radial
-}
 
 /// Authors the straight skirt: waist, hip and hem rings of 8 nodes, front
 /// and back panels, side seams, profiles on the waist opening, hip line,
@@ -585,7 +544,8 @@ pub fn fitted_bodice(body: &FeatureBody, o: &BodiceOptions) -> Result<Template, 
         let mid_a = (s_top + 0.5 * (s_low - s_top).rem_euclid(total)).rem_euclid(total);
         let mid_b = (s_low + 0.5 * (s_top - s_low).rem_euclid(total)).rem_euclid(total);
         let radial = o.armhole_ease_mm * MM / std::f64::consts::TAU;
-        let armhole = Ring { nodes: Vec::new(), curve: loop_.clone(), params: Vec::new(), radial };
+        let horizontal = Plane { normal: DVec3::Y, offset: 0.0 };
+        let armhole = Ring { nodes: Vec::new(), curve: loop_.clone(), params: Vec::new(), radial, plane: horizontal };
         let ease_in_plane = |s: f64| {
             let p = loop_.point_at(s);
             p + (p - loop_.centroid()).normalize_or_zero() * radial

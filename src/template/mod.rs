@@ -4,6 +4,7 @@
 
 pub mod codec;
 pub mod format;
+pub mod girth;
 pub mod library;
 pub mod profile;
 pub mod topology;
