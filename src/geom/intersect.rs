@@ -240,7 +240,7 @@ mod tests {
         #[test]
         fn rigid_motions_keep_the_answer(
             axis in (-1.0f64..1.0, -1.0f64..1.0, 0.1f64..1.0),
-            angle in 0.0f64..6.28,
+            angle in 0.0f64..std::f64::consts::TAU,
             shift in (-1.0f64..1.0, -1.0f64..1.0, -1.0f64..1.0),
             offset in 0.0f64..0.3,
         ) {

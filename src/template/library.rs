@@ -405,9 +405,6 @@ fn outer_hull(line: &Polyline, s0: f64, s1: f64, interior: DVec3) -> Polyline {
     Polyline::new(chain, false)
 }
 
-/// A point of a girth at arc length `s`, moved outwards horizontally (away
-/// from the girth's centroid) by `radial`.
-
 /// Authors the straight skirt: waist, hip and hem rings of 8 nodes, front
 /// and back panels, side seams, profiles on the waist opening, hip line,
 /// hem, and on the centre and side lines between waist and hip.
