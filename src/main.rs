@@ -222,8 +222,9 @@ fn fit_chart(path: &std::path::Path, figure: &str) -> Result<(), Box<dyn std::er
     };
     let model = BodyModel::embedded()?;
     let mut out = std::io::stdout().lock();
+    let fit_opts = fit::FitOptions::for_sex(chart.sex);
     for row in &chart.rows {
-        let f = fit::fit_size(model, row, &fit::FitOptions::default())?;
+        let f = fit::fit_size(model, row, &fit_opts)?;
         write!(out, "size {:>4}:", row.size)?;
         for (id, r) in &f.residuals {
             write!(out, "  {id} {:.1} cm ({:+.2} mm)", r.target_m * 100.0, r.error_mm())?;

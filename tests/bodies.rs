@@ -13,7 +13,7 @@ use grade3d::geom::polyline::Polyline;
 use grade3d::geom::simplify::{remesh_unrelated, SimplifyOptions};
 use grade3d::mannequin::fit::{fit_size, FitOptions};
 use grade3d::mannequin::model::BodyModel;
-use grade3d::mannequin::size_chart::{parse_csv, FigureType, SizeChartError, SizeChartOptions};
+use grade3d::mannequin::size_chart::{parse_csv, FigureType, Sex, SexSource, SizeChartError, SizeChartOptions};
 use proptest::prelude::*;
 
 mod common;
@@ -75,6 +75,27 @@ fn fit_chart(figure: FigureType) -> BTreeMap<MeasurementId, f64> {
     }
     eprintln!("{figure:?}: worst residual per measurement (mm): {worst:.3?}");
     worst
+}
+
+#[test]
+fn mens_chart_is_read_as_mens_and_fitted_from_a_male_body() {
+    let text = std::fs::read_to_string(fixtures().join("size-charts/mens-36-46-in.csv")).unwrap();
+    let chart = parse_csv(&text, &SizeChartOptions::default()).unwrap();
+    assert_eq!((chart.sex, chart.sex_source), (Sex::Male, SexSource::Inferred));
+    let model = BodyModel::embedded().unwrap();
+    let opts = FitOptions::for_sex(chart.sex);
+    let mut worst: BTreeMap<MeasurementId, f64> = BTreeMap::new();
+    for row in &chart.rows {
+        let f = fit_size(model, row, &opts).unwrap();
+        assert_eq!(f.params.macros.gender, 1.0, "size {}: a male body", row.size);
+        for (id, r) in &f.residuals {
+            let e = r.error_mm().abs();
+            assert!(e <= 5.0, "men's size {}: {id} off by {e:.2} mm", row.size);
+            let w = worst.entry(*id).or_insert(0.0);
+            *w = w.max(e);
+        }
+    }
+    eprintln!("men's chart: worst residual per measurement (mm): {worst:.3?}");
 }
 
 #[test]

@@ -33,7 +33,7 @@ use serde::{Deserialize, Serialize};
 
 use super::landmarks::{hm08_landmarks, Hm08LandmarkOptions, LandmarkError};
 use super::model::{BodyModel, MannequinError, MannequinParams};
-use super::size_chart::SizeRow;
+use super::size_chart::{Sex, SizeRow};
 use crate::body::derive::{derive_curve, derive_features, DeriveOptions, FeatureError, Landmarks, MM_PER_M};
 use crate::body::feature::FeatureBody;
 use crate::body::measure::{girth_of, measure, shoulder_girth, MeasureOptions, MeasurementId, Measurements};
@@ -94,6 +94,19 @@ impl Default for FitOptions {
             measure: MeasureOptions::default(),
             landmarks: Hm08LandmarkOptions::default(),
         }
+    }
+}
+
+impl FitOptions {
+    /// The defaults with the base body of `sex` (gender 0 or 1): a men's
+    /// chart is fitted from a male body, not a female one reshaped.
+    pub fn for_sex(sex: Sex) -> Self {
+        let mut o = Self::default();
+        o.base.macros.gender = match sex {
+            Sex::Female => 0.0,
+            Sex::Male => 1.0,
+        };
+        o
     }
 }
 

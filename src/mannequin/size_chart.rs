@@ -75,6 +75,30 @@ pub enum FigureType {
     Straight,
 }
 
+/// Whose body a chart describes: the sex of its mannequins' model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Sex {
+    /// Women's (misses', petites', …) charts.
+    #[default]
+    Female,
+    /// Men's charts.
+    Male,
+}
+
+/// How a chart's [`Sex`] was settled.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SexSource {
+    /// The chart (or the request) says it.
+    Stated,
+    /// From its columns: a bust, underbust or ASTM figure-type waist makes a
+    /// women's chart; a chest girth without them a men's.
+    Inferred,
+    /// Neither: women's, the default.
+    Default,
+}
+
 /// One size: targets in metres.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SizeRow {
@@ -89,8 +113,12 @@ pub struct SizeRow {
 /// A parsed size chart.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SizeChart {
-    /// The figure type used for the waist.
+    /// The figure type used for the waist (women's charts; ASTM D5585).
     pub figure: FigureType,
+    /// Whose body the chart describes.
+    pub sex: Sex,
+    /// How `sex` was settled.
+    pub sex_source: SexSource,
     /// Rows in chart order.
     pub rows: Vec<SizeRow>,
 }
@@ -103,11 +131,14 @@ pub struct SizeChartOptions {
     pub max_sizes: usize,
     /// Figure type when the chart does not say. Default curvy.
     pub figure: FigureType,
+    /// Sex when the chart does not say (else inferred from its columns).
+    /// Default none.
+    pub sex: Option<Sex>,
 }
 
 impl Default for SizeChartOptions {
     fn default() -> Self {
-        Self { max_sizes: 40, figure: FigureType::Curvy }
+        Self { max_sizes: 40, figure: FigureType::Curvy, sex: None }
     }
 }
 
@@ -186,6 +217,20 @@ pub enum SizeChartError {
     DuplicateSize {
         /// The size.
         size: String,
+    },
+    /// Rows of a CSV chart's `sex` column disagree.
+    #[error("size `{size}`: sex `{sex}` differs from the chart's first row (one chart, one sex)")]
+    ConflictingSex {
+        /// The size.
+        size: String,
+        /// Its `sex` cell.
+        sex: String,
+    },
+    /// A `sex` that is neither `female` nor `male`.
+    #[error("sex `{sex}`: expected `female` or `male`")]
+    UnknownSex {
+        /// The value given.
+        sex: String,
     },
     /// A row with no measurement.
     #[error("size `{size}` has no measurements")]
@@ -280,7 +325,9 @@ fn finish(
     chart_unit: Option<String>,
     opts: &SizeChartOptions,
     figure: FigureType,
+    stated: Option<Sex>,
 ) -> Result<SizeChart, SizeChartError> {
+    let mut women = false;
     if raw.is_empty() {
         return Err(SizeChartError::Empty);
     }
@@ -303,6 +350,8 @@ fn finish(
         let mut alternatives = BTreeMap::new();
         for (col, v) in r.values {
             let (kind, id) = column(&col, figure)?;
+            women |= matches!(id, MeasurementId::BustGirth | MeasurementId::UnderbustGirth)
+                || col.trim().starts_with("waist_girth_");
             let (value, unit) = match v {
                 RawValue::Text(t) if t.trim().is_empty() => continue,
                 RawValue::Text(t) => {
@@ -336,7 +385,23 @@ fn finish(
         }
         rows.push(SizeRow { size: r.size, targets, alternatives });
     }
-    Ok(SizeChart { figure, rows })
+    let (sex, sex_source) = match stated.or(opts.sex) {
+        Some(s) => (s, SexSource::Stated),
+        None if women => (Sex::Female, SexSource::Inferred),
+        None if rows.iter().any(|r| r.targets.contains_key(&MeasurementId::ChestGirth)) => {
+            (Sex::Male, SexSource::Inferred)
+        }
+        None => (Sex::Female, SexSource::Default),
+    };
+    Ok(SizeChart { figure, sex, sex_source, rows })
+}
+
+fn parse_sex(text: &str) -> Result<Sex, SizeChartError> {
+    match text.trim().to_ascii_lowercase().as_str() {
+        "female" | "f" | "women" | "womens" | "women's" => Ok(Sex::Female),
+        "male" | "m" | "men" | "mens" | "men's" => Ok(Sex::Male),
+        _ => Err(SizeChartError::UnknownSex { sex: text.to_owned() }),
+    }
 }
 
 /// Parses a CSV size chart.
@@ -346,8 +411,11 @@ pub fn parse_csv(text: &str, opts: &SizeChartOptions) -> Result<SizeChart, SizeC
         rdr.headers().map_err(|e| SizeChartError::Syntax(e.to_string()))?.iter().map(str::to_owned).collect();
     let size_col = headers.iter().position(|h| h == "size").ok_or(SizeChartError::NoSizeColumn)?;
     let unit_col = headers.iter().position(|h| h == "unit");
+    let sex_col = headers.iter().position(|h| h == "sex");
+    let skip = |i: usize| i == size_col || Some(i) == unit_col || Some(i) == sex_col;
+    let mut stated: Option<Sex> = None;
     for (i, h) in headers.iter().enumerate() {
-        if i != size_col && Some(i) != unit_col {
+        if !skip(i) {
             column(h, opts.figure)?;
         }
     }
@@ -359,15 +427,24 @@ pub fn parse_csv(text: &str, opts: &SizeChartOptions) -> Result<SizeChart, SizeC
         }
         let size = rec.get(size_col).unwrap_or("").to_owned();
         let unit = unit_col.and_then(|c| rec.get(c)).filter(|u| !u.is_empty()).map(str::to_owned);
+        if let Some(cell) = sex_col.and_then(|c| rec.get(c)).filter(|x| !x.is_empty()) {
+            let sex = parse_sex(cell)?;
+            match stated {
+                Some(first) if first != sex => {
+                    return Err(SizeChartError::ConflictingSex { size, sex: cell.to_owned() })
+                }
+                _ => stated = Some(sex),
+            }
+        }
         let values = headers
             .iter()
             .enumerate()
-            .filter(|(i, _)| *i != size_col && Some(*i) != unit_col)
+            .filter(|(i, _)| !skip(*i))
             .map(|(i, h)| (h.clone(), RawValue::Text(rec.get(i).unwrap_or("").to_owned())))
             .collect();
         raw.push(RawRow { size, unit, values });
     }
-    finish(raw, None, opts, opts.figure)
+    finish(raw, None, opts, opts.figure, stated)
 }
 
 #[derive(Deserialize)]
@@ -375,6 +452,7 @@ pub fn parse_csv(text: &str, opts: &SizeChartOptions) -> Result<SizeChart, SizeC
 struct JsonChart {
     unit: Option<String>,
     figure: Option<FigureType>,
+    sex: Option<Sex>,
     sizes: Vec<JsonRow>,
 }
 
@@ -419,12 +497,42 @@ pub fn parse_json(text: &str, opts: &SizeChartOptions) -> Result<SizeChart, Size
                 .collect(),
         })
         .collect();
-    finish(raw, c.unit, opts, figure)
+    finish(raw, c.unit, opts, figure, c.sex)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_chart_says_or_shows_whose_body_it_is() {
+        // ASTM misses: bust and the figure-type waists make it a women's chart
+        let astm = parse_csv(ASTM, &Default::default()).unwrap();
+        assert_eq!((astm.sex, astm.sex_source), (Sex::Female, SexSource::Inferred));
+        // a men's chart: chest, waist, hip, no bust
+        let men = "size,unit,chest_girth,waist_girth,hip_girth\n40,in,40,34,40\n42,in,42,36,42\n";
+        let m = parse_csv(men, &Default::default()).unwrap();
+        assert_eq!((m.sex, m.sex_source), (Sex::Male, SexSource::Inferred));
+        // stated in a column, or in JSON, wins
+        let col = "size,unit,sex,chest_girth\n40,in,male,40\n42,in,male,42\n";
+        assert_eq!(parse_csv(col, &Default::default()).unwrap().sex_source, SexSource::Stated);
+        let j = r#"{"unit":"cm","sex":"female","sizes":[{"size":"S","measurements":{"chest_girth":84}}]}"#;
+        let f = parse_json(j, &Default::default()).unwrap();
+        assert_eq!((f.sex, f.sex_source), (Sex::Female, SexSource::Stated));
+        // one chart, one sex
+        let mixed = "size,unit,sex,chest_girth\n40,in,male,40\n42,in,female,42\n";
+        assert_eq!(
+            parse_csv(mixed, &Default::default()).unwrap_err(),
+            SizeChartError::ConflictingSex { size: "42".into(), sex: "female".into() }
+        );
+        assert_eq!(
+            parse_csv("size,sex,chest_girth\n40,x,100\n", &Default::default()).unwrap_err(),
+            SizeChartError::UnknownSex { sex: "x".into() }
+        );
+        // nothing to tell by: women's, said to be the default
+        let hips = parse_csv("size,unit,hip_girth\nS,cm,94\n", &Default::default()).unwrap();
+        assert_eq!((hips.sex, hips.sex_source), (Sex::Female, SexSource::Default));
+    }
 
     const ASTM: &str = include_str!("../../fixtures/size-charts/astm-d5585-11-misses-partial.csv");
 

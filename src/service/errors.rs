@@ -69,6 +69,8 @@ pub fn chart_problem(e: &SizeChartError) -> Problem {
         SizeChartError::TooManySizes { .. } => "chart-too-many-sizes",
         SizeChartError::DuplicateSize { .. } => "chart-duplicate-size",
         SizeChartError::EmptyRow { .. } => "chart-empty-row",
+        SizeChartError::ConflictingSex { .. } => "chart-conflicting-sex",
+        SizeChartError::UnknownSex { .. } => "chart-unknown-sex",
     };
     Problem::bad_request(slug, e.to_string()).field("chart")
 }

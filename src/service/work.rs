@@ -31,7 +31,7 @@ use crate::io::gltf::{read_mesh, write_glb, GlbAttribute, GltfError, GltfReadOpt
 use crate::io::landmarks::{parse_landmarks, LandmarkFileError};
 use crate::mannequin::fit::{fit_size, FitError, FitOptions};
 use crate::mannequin::model::{BodyModel, MannequinError};
-use crate::mannequin::size_chart::SizeChart;
+use crate::mannequin::size_chart::{Sex, SizeChart};
 use crate::pattern::export::{dxf, rul, svg, ExportError};
 use crate::pattern::grade::{grade_rules, nests, GradeError};
 use crate::pattern::piece::PatternPiece;
@@ -470,10 +470,11 @@ pub fn size_chart(
     let mut per_template: Vec<Vec<(String, Vec<PatternPiece>)>> = vec![Vec::new(); templates.len()];
     let mut sizes = Vec::new();
     let total = chart.rows.len();
+    let fit_opts = FitOptions::for_sex(chart.sex);
     for (done, row) in chart.rows.iter().enumerate() {
         progress(stage::FIT, done, total);
         let start = Instant::now();
-        let fitted = fit_size(model, row, &FitOptions::default())
+        let fitted = fit_size(model, row, &fit_opts)
             .map_err(|source| WorkError::Fit { size: row.size.clone(), source })?;
         timer.add(stage::FIT, start);
         progress(stage::REFINE, done, total);
@@ -495,7 +496,9 @@ pub fn size_chart(
     graded_nests(templates, &per_template, &base, &mut timer, &mut artefacts)?;
     let report = serde_json::json!({
         "flow": "size-chart",
-        "figure": chart.figure,
+        "sex": chart.sex,
+        "sex_source": chart.sex_source,
+        "figure": (chart.sex == Sex::Female).then_some(chart.figure),
         "base_size": base,
         "templates": templates.iter().map(|t| serde_json::json!({"name": t.name, "version": t.version})).collect::<Vec<_>>(),
         "collision_checked": ctx.gpu.is_some(),
