@@ -474,8 +474,8 @@ pub fn size_chart(
     for (done, row) in chart.rows.iter().enumerate() {
         progress(stage::FIT, done, total);
         let start = Instant::now();
-        let fitted = fit_size(model, row, &fit_opts)
-            .map_err(|source| WorkError::Fit { size: row.size.clone(), source })?;
+        let fitted =
+            fit_size(model, row, &fit_opts).map_err(|source| WorkError::Fit { size: row.size.clone(), source })?;
         timer.add(stage::FIT, start);
         progress(stage::REFINE, done, total);
         let graded = grade_body(ctx, templates, &fitted.body, &row.size, true, &mut timer, &mut artefacts)?;

@@ -13,7 +13,11 @@
 //! **Decode.** On a body `H'`: `p'(v̄_i) = p'(q_j) + α n' + β t'(f1) + γ t'(f2)`
 //! (Eq. 1), or `p'(q_j) + d` (Eq. 2, for comparison: it does not follow
 //! the body's orientation, seed 000 Fig. 6). Profiles follow their end
-//! nodes by Eq. (5) ([`Profile::relocated`]); then the profiles of ring
+//! nodes by Eq. (5) ([`Profile::relocated`]). With Eq. (1), the nodes of a
+//! ring around a girth the template declares an ease for are first placed
+//! on the body's own eased girth ([`super::girth::place_ring_nodes`]: where
+//! authoring put them; Eq. (1) gives the same point on the reference body),
+//! and after Eq. (5) the profiles of ring
 //! edges around a girth the template declares an ease for are sampled again
 //! along the body's own eased girth ([`super::girth::refit_rings`]), as
 //! authoring sampled them on the reference body, so that the declared ease
@@ -32,7 +36,7 @@ use super::format::{
     Dart, Edge, Face, GradingDefaults, GrainLine, Hang, Node, Notch, Panel, Relocation, Seam, Template, TemplateError,
     SCHEMA_ID, SCHEMA_VERSION,
 };
-use super::girth::refit_rings;
+use super::girth::{place_ring_nodes, refit_rings};
 use super::profile::{Profile, ProfileError};
 use crate::body::feature::FeatureBody;
 use crate::body::vocab::{PointId, VOCABULARY_VERSION};
@@ -330,6 +334,11 @@ pub fn decode(t: &Template, body: &FeatureBody, relocation: Relocation) -> Resul
         };
         positions.push(p);
     }
+    // ring nodes on the body's eased girths (as authored), then the hangs from there
+    let eq1 = relocation == Relocation::Eq1Frame;
+    if eq1 {
+        place_ring_nodes(t, body, &mut positions, &[]);
+    }
     let hung = hang(&t.hangs, body, &mut positions);
     let triangles = (0..t.faces.len()).map(|f| t.face_nodes(f)).collect();
     let mut profiles = Vec::with_capacity(t.edges.len());
@@ -347,7 +356,9 @@ pub fn decode(t: &Template, body: &FeatureBody, relocation: Relocation) -> Resul
         profiles.push(Some(moved));
     }
     // ring edges follow the body's eased girth, as on the reference body (ease as declared)
-    refit_rings(t, body, &positions, &mut profiles, &hung)
-        .map_err(|(edge, source)| CodecError::Profile { edge, source })?;
+    if eq1 {
+        refit_rings(t, body, &positions, &mut profiles, &hung)
+            .map_err(|(edge, source)| CodecError::Profile { edge, source })?;
+    }
     Ok(CoarseMesh { positions, triangles, profiles, hung })
 }

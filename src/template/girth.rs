@@ -2,8 +2,9 @@
 //! item 2; `DESIGN.md` §9 "Ease as declared").
 //!
 //! A template declares an ease `e` for a girth (`ease_mm["hip"] = 40`). It
-//! was authored by easing the reference body's girth outward by the radius
-//! increase `r = e / 2π` that adds `e` to a convex loop's length: ring nodes
+//! was authored by easing the reference body's girth outward by the offset
+//! `r` that adds `e` to the girth's tape length ([`ring_radial`]; `e / 2π`
+//! for a circle): ring nodes
 //! at `c(s_j) + r·u(s_j)` and ring edge profiles sampled along the eased
 //! loop between them, with `c` the girth *bridged* as a tape bridges it (its
 //! concavities filled to the convex hull in its plane) and `u` the outward
@@ -142,6 +143,72 @@ pub fn ring_edges(t: &Template, body: &FeatureBody, positions: &[DVec3], curve: 
         .collect()
 }
 
+/// Iterations of [`ring_radial`]'s secant refinement.
+const RADIAL_ITERATIONS: usize = 4;
+
+/// The outward offset `r` whose eased ring adds exactly `ease` (m) to the
+/// tape length of the bridged girth `loop_` in `plane`. `e / 2π` does that
+/// for a circle only: moving points radially from the centroid adds
+/// `r ∮ sin φ dθ ≤ 2πr` (φ the angle between the loop's tangent and the
+/// radius), so on an oval girth the ease would fall short (by 7–10 mm of
+/// 50–80 over the population of issue #13). Starting from `e / 2π`, the
+/// offset is scaled by `e / (tape(r) − tape(0))` a few times (tape length is
+/// nearly linear in `r`). Returns `e / 2π` for a degenerate loop.
+pub fn ring_radial(loop_: &Polyline, plane: &Plane, ease: f64) -> f64 {
+    let mut r = ease / std::f64::consts::TAU;
+    let base = tape_length(&[loop_], plane);
+    let cum = loop_.cumulative();
+    let params: Vec<f64> = cum[..loop_.points.len()].to_vec();
+    for _ in 0..RADIAL_ITERATIONS {
+        let ring = Polyline::new(params.iter().map(|&s| eased(loop_, s, r, plane)).collect(), true);
+        let gained = tape_length(&[&ring], plane) - base;
+        if !(gained.is_finite() && gained.abs() > f64::EPSILON) || ease == 0.0 {
+            break;
+        }
+        r *= ease / gained;
+    }
+    r
+}
+
+/// The ring nodes of `curve` (module docs): nodes tied to feature points on
+/// the curve, within [`RING_PLANE_TOLERANCE_M`] of its plane, not `hung`.
+pub fn ring_nodes(t: &Template, body: &FeatureBody, positions: &[DVec3], curve: CurveId, hung: &[u32]) -> Vec<u32> {
+    let Some(plane) = girth_plane(body, curve) else { return Vec::new() };
+    (0..t.nodes.len() as u32)
+        .filter(|&node| {
+            let def = point_def(t.nodes[node as usize].point);
+            (def.f1 == curve || def.f2 == curve)
+                && !hung.contains(&node)
+                && positions
+                    .get(node as usize)
+                    .is_some_and(|p| plane.signed_distance(*p).abs() <= RING_PLANE_TOLERANCE_M)
+        })
+        .collect()
+}
+
+/// Places every ring node on the body's eased girth at its feature point,
+/// `ĉ(s_j) + r·û`, as authoring placed it on the reference body (where Eq. (1)
+/// gives the same point): Eq. (1)'s fixed offset along a frame that tilts
+/// with the body (a noisy scan, a full bust) would carry the node off the
+/// girth's plane and its ease. Returns how many nodes moved.
+pub fn place_ring_nodes(t: &Template, body: &FeatureBody, positions: &mut [DVec3], hung: &[u32]) -> usize {
+    let mut moved = 0;
+    for (name, &ease) in &t.ease_mm {
+        for &curve in ring_curves(name) {
+            let (Some(c), Some(plane)) = (body.curves.get(&curve), girth_plane(body, curve)) else { continue };
+            let loop_ = bridged(&c.polyline, &plane);
+            let radial = ring_radial(&loop_, &plane, ease * 1e-3);
+            for node in ring_nodes(t, body, positions, curve, hung) {
+                let Some(q) = body.points.get(&t.nodes[node as usize].point) else { continue };
+                let Some(at) = loop_.closest(q.position) else { continue };
+                positions[node as usize] = eased(&loop_, at.s, radial, &plane);
+                moved += 1;
+            }
+        }
+    }
+    moved
+}
+
 /// Samples every ring edge's profile again along the body's eased girth
 /// (module docs). `profiles` are indexed by template edge and oriented from
 /// the edge's start node; `hung` are the nodes a hang moved. Returns how many
@@ -158,10 +225,10 @@ pub fn refit_rings(
 ) -> Result<usize, (u32, ProfileError)> {
     let mut refitted = 0;
     for (name, &ease) in &t.ease_mm {
-        let radial = ease * 1e-3 / std::f64::consts::TAU;
         for &curve in ring_curves(name) {
             let (Some(c), Some(plane)) = (body.curves.get(&curve), girth_plane(body, curve)) else { continue };
             let loop_ = bridged(&c.polyline, &plane);
+            let radial = ring_radial(&loop_, &plane, ease * 1e-3);
             let total = loop_.length();
             if total <= 0.0 {
                 continue;
@@ -241,4 +308,61 @@ pub fn expected_ease(t: &Template, body: &FeatureBody, m: &CoarseMesh) -> std::c
         out.insert(name.clone(), expected);
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ellipse(a: f64, b: f64, n: usize) -> Polyline {
+        let pts = (0..n)
+            .map(|k| {
+                let t = std::f64::consts::TAU * k as f64 / n as f64;
+                DVec3::new(a * t.cos(), 1.0, b * t.sin())
+            })
+            .collect();
+        Polyline::new(pts, true)
+    }
+
+    #[test]
+    fn the_eased_ring_adds_exactly_the_declared_ease() {
+        let plane = Plane { normal: DVec3::Y, offset: 1.0 };
+        let tape_gain = |loop_: &Polyline, r: f64| {
+            let cum = loop_.cumulative();
+            let ring =
+                Polyline::new(cum[..loop_.points.len()].iter().map(|&s| eased(loop_, s, r, &plane)).collect(), true);
+            tape_length(&[&ring], &plane) - tape_length(&[loop_], &plane)
+        };
+        // a circle: e / 2π, as the radius increase of a circle
+        let circle = ellipse(0.15, 0.15, 720);
+        let r = ring_radial(&circle, &plane, 0.05);
+        assert!((r - 0.05 / std::f64::consts::TAU).abs() < 1e-6, "{r}");
+        // an oval waist (30 × 20 cm): e / 2π falls short, the refined offset does not
+        let oval = ellipse(0.15, 0.10, 720);
+        let short = tape_gain(&oval, 0.05 / std::f64::consts::TAU);
+        assert!(short < 0.048, "radial e/2π adds {short}");
+        let r = ring_radial(&oval, &plane, 0.05);
+        assert!((tape_gain(&oval, r) - 0.05).abs() < 1e-5, "{}", tape_gain(&oval, r));
+        // no ease, no offset
+        assert_eq!(ring_radial(&oval, &plane, 0.0), 0.0);
+    }
+
+    #[test]
+    fn bridging_fills_a_concavity_to_the_hull_and_keeps_the_convex_part() {
+        let plane = Plane { normal: DVec3::Y, offset: 0.0 };
+        // a square with one edge pushed in (a cleft)
+        let mut pts = Vec::new();
+        for k in 0..40 {
+            let t = k as f64 / 40.0;
+            pts.push(DVec3::new(-0.1 + 0.2 * t, 0.0, -0.1 + 0.03 * (std::f64::consts::PI * t).sin()));
+        }
+        pts.extend([DVec3::new(0.1, 0.0, -0.1), DVec3::new(0.1, 0.0, 0.1), DVec3::new(-0.1, 0.0, 0.1)]);
+        let loop_ = Polyline::new(pts, true);
+        let b = bridged(&loop_, &plane);
+        // the pushed-in edge now lies on the hull line z = −0.1
+        for p in &b.points[1..40] {
+            assert!((p.z + 0.1).abs() < 1e-9, "{p}");
+        }
+        assert!((tape_length(&[&b], &plane) - tape_length(&[&loop_], &plane)).abs() < 1e-12);
+    }
 }

@@ -3,8 +3,10 @@
 //!
 //! Templates are authored on a **reference body** — the embedded mannequin
 //! with gender 0 (female) and every other parameter neutral — from that
-//! body's feature curves: rings of nodes on the girths (eased outwards by
-//! `ease / 2π`, the radius increase that adds `ease` to a girth), vertical
+//! body's feature curves: rings of nodes on the girths (eased outwards in
+//! the girth's plane by the offset that adds `ease` to its tape length,
+//! [`super::girth::ring_radial`]; decoding places them the same way on every
+//! body, [`super::girth`]), vertical
 //! node columns on the centre and side lines, and profiles sampled along
 //! the eased girths and lines. The nodes are then encoded by seed 000
 //! Eq. (1) ([`super::codec::encode`]).
@@ -171,7 +173,7 @@ impl<'a> Builder<'a> {
 
     /// A ring on girth `curve` with a node at each feature point of
     /// `points` (in the girth's direction: anticlockwise seen from above),
-    /// each tied to its point and eased outwards by `ease_mm / 2π`. Every
+    /// each tied to its point and eased outwards by [`girth::ring_radial`]. Every
     /// ring edge gets a profile along the eased girth.
     fn ring(&mut self, curve: CurveId, points: &[PointId], ease_mm: f64) -> Result<Ring, AuthorError> {
         self.ring_through(curve, points, ease_mm, None)
@@ -194,7 +196,7 @@ impl<'a> Builder<'a> {
             let p = self.point(*id)?;
             params.push(loop_.closest(p).map_or(0.0, |c| c.s));
         }
-        let radial = ease_mm * MM / std::f64::consts::TAU;
+        let radial = girth::ring_radial(&loop_, &plane, ease_mm * MM);
         let nodes: Vec<u32> = params
             .iter()
             .zip(points)
