@@ -340,7 +340,7 @@ mod tests {
         // an oval waist (30 × 20 cm): e / 2π falls short, the refined offset does not
         let oval = ellipse(0.15, 0.10, 720);
         let short = tape_gain(&oval, 0.05 / std::f64::consts::TAU);
-        assert!(short < 0.048, "radial e/2π adds {short}");
+        assert!(short < 0.049, "radial e/2π adds {short}");
         let r = ring_radial(&oval, &plane, 0.05);
         assert!((tape_gain(&oval, r) - 0.05).abs() < 1e-5, "{}", tape_gain(&oval, r));
         // no ease, no offset
@@ -350,18 +350,27 @@ mod tests {
     #[test]
     fn bridging_fills_a_concavity_to_the_hull_and_keeps_the_convex_part() {
         let plane = Plane { normal: DVec3::Y, offset: 0.0 };
-        // a square with one edge pushed in (a cleft)
+        // a square sampled evenly on every side, its first side pushed in (a cleft)
         let mut pts = Vec::new();
-        for k in 0..40 {
-            let t = k as f64 / 40.0;
-            pts.push(DVec3::new(-0.1 + 0.2 * t, 0.0, -0.1 + 0.03 * (std::f64::consts::PI * t).sin()));
+        let corners = [(-0.1, -0.1), (0.1, -0.1), (0.1, 0.1), (-0.1, 0.1)];
+        for side in 0..4 {
+            let (a, b) = (corners[side], corners[(side + 1) % 4]);
+            for k in 0..40 {
+                let t = k as f64 / 40.0;
+                let dent = if side == 0 { 0.03 * (std::f64::consts::PI * t).sin() } else { 0.0 };
+                pts.push(DVec3::new(a.0 + (b.0 - a.0) * t, 0.0, a.1 + (b.1 - a.1) * t + dent));
+            }
         }
-        pts.extend([DVec3::new(0.1, 0.0, -0.1), DVec3::new(0.1, 0.0, 0.1), DVec3::new(-0.1, 0.0, 0.1)]);
         let loop_ = Polyline::new(pts, true);
         let b = bridged(&loop_, &plane);
-        // the pushed-in edge now lies on the hull line z = −0.1
-        for p in &b.points[1..40] {
+        // the pushed-in edge now lies on the hull: its middle on the line z = −0.1,
+        // its ends (rays from the centroid near a corner) on the side edges
+        for p in &b.points[10..30] {
             assert!((p.z + 0.1).abs() < 1e-9, "{p}");
+        }
+        for p in &b.points {
+            let on_hull = (p.z + 0.1).abs() < 1e-9 || (p.x.abs() - 0.1).abs() < 1e-9 || (p.z - 0.1).abs() < 1e-9;
+            assert!(on_hull, "{p}");
         }
         assert!((tape_length(&[&b], &plane) - tape_length(&[&loop_], &plane)).abs() < 1e-12);
     }
