@@ -395,6 +395,18 @@ fn check_girths(
     opts: &DeriveOptions,
 ) -> Result<(), FeatureError> {
     let girth = |id: CurveId| curves.get(&id).map(|c| super::measure::girth_of(&c.polyline, c.plane.as_ref()));
+    let too_long = |curve: CurveId, g: f64, max: f64, reason: String| {
+        if g > max {
+            return Err(FeatureError::ImplausibleGirth {
+                curve,
+                girth_mm: g * MM_PER_M,
+                min_mm: 0.0,
+                max_mm: max * MM_PER_M,
+                reason,
+            });
+        }
+        Ok(())
+    };
     use CurveId as C;
     for id in [
         C::NeckBase,
@@ -412,34 +424,20 @@ fn check_girths(
         C::ArmscyeLeft,
         C::ArmscyeRight,
     ] {
-        let Some(g) = girth(id) else { continue };
-        let max = opts.max_girth_to_stature * stature;
-        if g > max {
-            return Err(FeatureError::ImplausibleGirth {
-                curve: id,
-                girth_mm: g * MM_PER_M,
-                min_mm: 0.0,
-                max_mm: max * MM_PER_M,
-                reason: format!("at most {} × the stature", opts.max_girth_to_stature),
-            });
+        if let Some(g) = girth(id) {
+            let max = opts.max_girth_to_stature * stature;
+            too_long(id, g, max, format!("at most {} × the stature", opts.max_girth_to_stature))?;
         }
     }
     if let Some(chest) = girth(CurveId::Chest) {
         for id in [CurveId::ArmscyeLeft, CurveId::ArmscyeRight] {
-            let Some(g) = girth(id) else { continue };
-            let max = opts.max_armscye_to_chest * chest;
-            if g > max {
-                return Err(FeatureError::ImplausibleGirth {
-                    curve: id,
-                    girth_mm: g * MM_PER_M,
-                    min_mm: 0.0,
-                    max_mm: max * MM_PER_M,
-                    reason: format!(
-                        "at most {} × the chest girth of {:.0} mm: the armscye section runs through the torso?",
-                        opts.max_armscye_to_chest,
-                        chest * MM_PER_M
-                    ),
-                });
+            if let Some(g) = girth(id) {
+                let reason = format!(
+                    "at most {} × the chest girth of {:.0} mm: the armscye section runs through the torso?",
+                    opts.max_armscye_to_chest,
+                    chest * MM_PER_M
+                );
+                too_long(id, g, opts.max_armscye_to_chest * chest, reason)?;
             }
         }
     }

@@ -170,6 +170,21 @@ pub fn ring_radial(loop_: &Polyline, plane: &Plane, ease: f64) -> f64 {
     r
 }
 
+/// Every girth ring `t` declares, on `body`: (curve, its bridged loop, its
+/// plane, the offset that adds the declared ease, [`ring_radial`]).
+fn eased_girths(t: &Template, body: &FeatureBody) -> Vec<(CurveId, Polyline, Plane, f64)> {
+    let mut out = Vec::new();
+    for (name, &ease) in &t.ease_mm {
+        for &curve in ring_curves(name) {
+            let (Some(c), Some(plane)) = (body.curves.get(&curve), girth_plane(body, curve)) else { continue };
+            let loop_ = bridged(&c.polyline, &plane);
+            let radial = ring_radial(&loop_, &plane, ease * 1e-3);
+            out.push((curve, loop_, plane, radial));
+        }
+    }
+    out
+}
+
 /// The ring nodes of `curve` (module docs): nodes tied to feature points on
 /// the curve, within [`RING_PLANE_TOLERANCE_M`] of its plane, not `hung`.
 pub fn ring_nodes(t: &Template, body: &FeatureBody, positions: &[DVec3], curve: CurveId, hung: &[u32]) -> Vec<u32> {
@@ -193,17 +208,12 @@ pub fn ring_nodes(t: &Template, body: &FeatureBody, positions: &[DVec3], curve: 
 /// girth's plane and its ease. Returns how many nodes moved.
 pub fn place_ring_nodes(t: &Template, body: &FeatureBody, positions: &mut [DVec3], hung: &[u32]) -> usize {
     let mut moved = 0;
-    for (name, &ease) in &t.ease_mm {
-        for &curve in ring_curves(name) {
-            let (Some(c), Some(plane)) = (body.curves.get(&curve), girth_plane(body, curve)) else { continue };
-            let loop_ = bridged(&c.polyline, &plane);
-            let radial = ring_radial(&loop_, &plane, ease * 1e-3);
-            for node in ring_nodes(t, body, positions, curve, hung) {
-                let Some(q) = body.points.get(&t.nodes[node as usize].point) else { continue };
-                let Some(at) = loop_.closest(q.position) else { continue };
-                positions[node as usize] = eased(&loop_, at.s, radial, &plane);
-                moved += 1;
-            }
+    for (curve, loop_, plane, radial) in eased_girths(t, body) {
+        for node in ring_nodes(t, body, positions, curve, hung) {
+            let Some(q) = body.points.get(&t.nodes[node as usize].point) else { continue };
+            let Some(at) = loop_.closest(q.position) else { continue };
+            positions[node as usize] = eased(&loop_, at.s, radial, &plane);
+            moved += 1;
         }
     }
     moved
@@ -224,40 +234,35 @@ pub fn refit_rings(
     hung: &[u32],
 ) -> Result<usize, (u32, ProfileError)> {
     let mut refitted = 0;
-    for (name, &ease) in &t.ease_mm {
-        for &curve in ring_curves(name) {
-            let (Some(c), Some(plane)) = (body.curves.get(&curve), girth_plane(body, curve)) else { continue };
-            let loop_ = bridged(&c.polyline, &plane);
-            let radial = ring_radial(&loop_, &plane, ease * 1e-3);
-            let total = loop_.length();
-            if total <= 0.0 {
-                continue;
+    for (curve, loop_, plane, radial) in eased_girths(t, body) {
+        let total = loop_.length();
+        if total <= 0.0 {
+            continue;
+        }
+        for edge in ring_edges(t, body, positions, curve, hung) {
+            let e = &t.edges[edge as usize];
+            let Some(old) = profiles.get(edge as usize).and_then(|p| p.as_ref()) else { continue };
+            let n = old.points().len().max(2);
+            let param = |node: u32| -> Option<f64> {
+                let q = body.points.get(&t.nodes[node as usize].point)?.position;
+                Some(loop_.closest(q)?.s)
+            };
+            let (Some(sa), Some(sb)) = (param(e.start), param(e.end)) else { continue };
+            // the ring runs the shorter way round between neighbouring nodes
+            let fwd = (sb - sa).rem_euclid(total);
+            let ds = if fwd <= 0.5 * total { fwd } else { fwd - total };
+            let mut pts: Vec<DVec3> =
+                (0..n).map(|k| eased(&loop_, sa + ds * k as f64 / (n - 1) as f64, radial, &plane)).collect();
+            let (pa, pb) = (positions[e.start as usize], positions[e.end as usize]);
+            let (shift_a, shift_b) = (pa - pts[0], pb - pts[n - 1]);
+            for (k, p) in pts.iter_mut().enumerate() {
+                let w = k as f64 / (n - 1) as f64;
+                *p += shift_a * (1.0 - w) + shift_b * w;
             }
-            for edge in ring_edges(t, body, positions, curve, hung) {
-                let e = &t.edges[edge as usize];
-                let Some(old) = profiles.get(edge as usize).and_then(|p| p.as_ref()) else { continue };
-                let n = old.points().len().max(2);
-                let param = |node: u32| -> Option<f64> {
-                    let q = body.points.get(&t.nodes[node as usize].point)?.position;
-                    Some(loop_.closest(q)?.s)
-                };
-                let (Some(sa), Some(sb)) = (param(e.start), param(e.end)) else { continue };
-                // the ring runs the shorter way round between neighbouring nodes
-                let fwd = (sb - sa).rem_euclid(total);
-                let ds = if fwd <= 0.5 * total { fwd } else { fwd - total };
-                let mut pts: Vec<DVec3> =
-                    (0..n).map(|k| eased(&loop_, sa + ds * k as f64 / (n - 1) as f64, radial, &plane)).collect();
-                let (pa, pb) = (positions[e.start as usize], positions[e.end as usize]);
-                let (shift_a, shift_b) = (pa - pts[0], pb - pts[n - 1]);
-                for (k, p) in pts.iter_mut().enumerate() {
-                    let w = k as f64 / (n - 1) as f64;
-                    *p += shift_a * (1.0 - w) + shift_b * w;
-                }
-                pts[0] = pa;
-                pts[n - 1] = pb;
-                profiles[edge as usize] = Some(Profile::new(pts).map_err(|err| (edge, err))?);
-                refitted += 1;
-            }
+            pts[0] = pa;
+            pts[n - 1] = pb;
+            profiles[edge as usize] = Some(Profile::new(pts).map_err(|err| (edge, err))?);
+            refitted += 1;
         }
     }
     Ok(refitted)
