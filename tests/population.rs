@@ -58,6 +58,12 @@ const KNOWN_OPEN: &[(&str, &str, &str)] = &[
     ),
     (
         "straight-skirt",
+        "pop27-",
+        "as pop09: a slim, short man whose knees stand wider apart in the A-pose than the straight skirt hangs \
+         at knee level",
+    ),
+    (
+        "straight-skirt",
         "pop09-",
         "the knees stand wider apart in the A-pose than the straight skirt hangs at knee level: lifting the \
          hem over them oscillates between the knees' outer and inner faces",
