@@ -5,7 +5,10 @@
 //! pass over every vertex (fixed ones to their smaller clearance), the
 //! garment surface lifted until no triangle crosses the body
 //! ([`crate::refine::clear::clear_surface`]), and the sewing pattern (§6,
-//! issue #5).
+//! issue #5), cut from the surface before that lift
+//! ([`crate::refine::clear::ClearOptions::pattern_before_lift`]: the lifts
+//! are bumps cloth drapes over, not shape to cut). The expected ease of each
+//! declared girth is taken after decoding ([`Graded::expected_ease_mm`]).
 //!
 //! Pure core: data in, data out; the body's depth maps come in as an
 //! [`Obstacle`] that the caller renders (and caches) with
