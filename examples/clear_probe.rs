@@ -11,7 +11,7 @@ use glam::DVec3;
 use grade3d::body::derive::{derive_features, DeriveOptions};
 use grade3d::collide::cache::Obstacle;
 use grade3d::collide::render::{GpuContext, RenderOptions};
-use grade3d::geom::intersect::{intersecting_pairs, triangles_intersect};
+use grade3d::geom::intersect::{intersecting_pairs, self_intersections};
 use grade3d::geom::mesh::FaceId;
 use grade3d::geom::winding::{WindingOptions, WindingTree};
 use grade3d::io::gltf::{read_mesh, GltfReadOptions};
@@ -59,20 +59,14 @@ fn main() {
             let sub = "";
             let body = derive_features(mesh, &lm, &DeriveOptions::default()).unwrap();
             let tree = WindingTree::new(&body.mesh, &WindingOptions::default());
-            // body self-intersections (non-adjacent faces)
-            let btris: Vec<[u32; 3]> = body.mesh.triangles().iter().map(|t| t.map(|v| v.0)).collect();
-            let mut selfx = Vec::new();
-            for (i, t) in btris.iter().enumerate() {
-                let s = t.map(|v| body.mesh.positions()[v as usize]);
-                let lo = s[0].min(s[1]).min(s[2]);
-                let hi = s[0].max(s[1]).max(s[2]);
-                tree.faces_in_box(lo, hi, |f, c| {
-                    let u = btris[f.idx()];
-                    if f.idx() > i && !u.iter().any(|v| t.contains(v)) && triangles_intersect(s, c) {
-                        selfx.push((s[0] + s[1] + s[2]) / 3.0);
-                    }
-                });
-            }
+            // where the body's own surface crosses itself
+            let selfx: Vec<DVec3> = self_intersections(&tree, &body.mesh)
+                .iter()
+                .map(|(f, _)| {
+                    let c = tree.face_corners(*f);
+                    (c[0] + c[1] + c[2]) / 3.0
+                })
+                .collect();
             eprintln!("{sub}/{name}: body self-intersections {}", selfx.len());
             let maps = gpu.render(&body.mesh, &RenderOptions::default()).unwrap();
             let obstacle = Obstacle { maps, tree };

@@ -3,11 +3,12 @@
 //! (re-meshed to an unrelated topology, 1 mm normal noise, landmarks given
 //! as points only).
 //!
-//! CI runs the first [`CI_BODIES`] (the planted extremes and two draws);
-//! the rest under `--ignored`:
+//! Two tests, which run side by side: the first [`CI_BODIES`] (the planted
+//! extremes and two draws) and the other draws; all 40 bodies in CI
+//! (about 190 s on two cores):
 //!
 //! ```sh
-//! cargo test --release --test population -- --ignored --nocapture
+//! cargo test --release --test population -- --nocapture
 //! ```
 //!
 //! Bars asserted on every grade: the deepest garment vertex (fixed ones
@@ -39,7 +40,7 @@ use grade3d::template::library::builtin;
 const SEED: u64 = 13;
 /// Bodies in the population.
 const COUNT: usize = 40;
-/// Bodies CI grades (the rest run under `--ignored`).
+/// Bodies of the first test (the planted extremes and two draws).
 const CI_BODIES: usize = 12;
 /// Faces of the scan-like copies.
 const SCAN_FACES: usize = 60_000;
@@ -55,6 +56,18 @@ const KNOWN_OPEN: &[(&str, &str, &str)] = &[
         "pop04-",
         "the thighs are pressed into each other: most intersecting pairs left lie within 30 mm of a crossing \
          of the body's own surface, where no garment surface can pass between the legs",
+    ),
+    (
+        "",
+        "pop36-",
+        "feature derivation refuses this heavy, short man: the frame at the side neck points is degenerate \
+         (triple product −0.014 and −0.009 against the 0.1 floor), so nothing is graded",
+    ),
+    (
+        "fitted-bodice",
+        "pop12-m-heavy-short-scan",
+        "4 crossing pairs left after 12 rounds (largest lift 6.5 mm), none near a crossing of the body's own \
+         surface; not yet diagnosed",
     ),
     (
         "straight-skirt",
@@ -119,13 +132,19 @@ fn run(range: std::ops::Range<usize>) {
         };
         let maps = gpu.render(&body.mesh, &RenderOptions::default()).unwrap();
         let obstacle = Obstacle { maps, tree: WindingTree::new(&body.mesh, &WindingOptions::default()) };
-        let self_x: Vec<DVec3> = self_intersections(&obstacle.tree, &body.mesh)
-            .iter()
-            .map(|(f, _)| {
-                let c = obstacle.tree.face_corners(*f);
-                (c[0] + c[1] + c[2]) / 3.0
+        // where the body's own surface crosses itself: computed once, only if a grade needs it
+        let self_crossings = std::cell::OnceCell::new();
+        let self_x = || -> &Vec<DVec3> {
+            self_crossings.get_or_init(|| {
+                self_intersections(&obstacle.tree, &body.mesh)
+                    .iter()
+                    .map(|(f, _)| {
+                        let c = obstacle.tree.face_corners(*f);
+                        (c[0] + c[1] + c[2]) / 3.0
+                    })
+                    .collect()
             })
-            .collect();
+        };
         for t in &library {
             let g = match grade(t, &body, Some(&obstacle), &name, &GradeOptions::default()) {
                 Ok(g) => g,
@@ -155,7 +174,7 @@ fn run(range: std::ops::Range<usize>) {
                     .filter(|p| {
                         let c = obstacle.tree.face_corners(p.body);
                         let m = (c[0] + c[1] + c[2]) / 3.0;
-                        self_x.iter().any(|q| q.distance(m) < 0.03)
+                        self_x().iter().any(|q| q.distance(m) < 0.03)
                     })
                     .count();
                 failures.push(format!(
@@ -164,7 +183,7 @@ fn run(range: std::ops::Range<usize>) {
                     at("triangles through the body"),
                     g.collision.surface,
                     left.len(),
-                    self_x.len()
+                    self_x().len()
                 ));
             }
             for s in &g.pattern.seams {
@@ -238,7 +257,8 @@ fn population_subset_stays_outside_the_body() {
 }
 
 #[test]
-#[ignore = "the whole population: ~30 bodies × 2 forms × 3 templates (see the module docs)"]
-fn whole_population_stays_outside_the_body() {
+fn rest_of_the_population_stays_outside_the_body() {
+    let start = Instant::now();
     run(CI_BODIES..COUNT);
+    eprintln!("{:.1} s", start.elapsed().as_secs_f64());
 }

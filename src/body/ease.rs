@@ -42,7 +42,7 @@ use serde::{Deserialize, Serialize};
 use crate::body::feature::FeatureBody;
 use crate::body::measure::{girth_of, MeasurementId};
 use crate::body::vocab::{point_def, CurveId};
-use crate::geom::mesh::TriMesh;
+use crate::geom::mesh::{boundary_loops, TriMesh};
 use crate::geom::plane::Plane;
 use crate::geom::polyline::{tape_length, Polyline};
 use crate::geom::slice::slice;
@@ -124,41 +124,14 @@ fn is_opening(t: &Template, name: &str) -> bool {
     !ring.is_empty() && ring.iter().all(|&u| u == 1)
 }
 
-/// The boundary loops of a mesh (edges with one triangle, chained).
-fn boundary_loops(mesh: &TriMesh) -> Vec<Polyline> {
-    let mut count: BTreeMap<(u32, u32), usize> = BTreeMap::new();
-    for t in mesh.triangles() {
-        for k in 0..3 {
-            let (a, b) = (t[k].0, t[(k + 1) % 3].0);
-            *count.entry((a.min(b), a.max(b))).or_default() += 1;
-        }
-    }
-    // directed boundary edges as the triangles run them
-    let mut next: BTreeMap<u32, u32> = BTreeMap::new();
-    for t in mesh.triangles() {
-        for k in 0..3 {
-            let (a, b) = (t[k].0, t[(k + 1) % 3].0);
-            if count[&(a.min(b), a.max(b))] == 1 {
-                next.insert(a, b);
-            }
-        }
-    }
-    let mut loops = Vec::new();
-    while let Some((&start, _)) = next.iter().next() {
-        let mut ids = vec![start];
-        let mut at = start;
-        while let Some(n) = next.remove(&at) {
-            if n == start {
-                break;
-            }
-            ids.push(n);
-            at = n;
-        }
-        if ids.len() >= 3 {
-            loops.push(Polyline::new(ids.iter().map(|&v| mesh.positions()[v as usize]).collect(), true));
-        }
-    }
-    loops
+/// The boundary loops of a mesh as closed polylines.
+fn boundary_polylines(mesh: &TriMesh) -> Vec<Polyline> {
+    let tris: Vec<[u32; 3]> = mesh.triangles().iter().map(|t| t.map(|v| v.0)).collect();
+    boundary_loops(&tris)
+        .into_iter()
+        .filter(|ids| ids.len() >= 3)
+        .map(|ids| Polyline::new(ids.iter().map(|&v| mesh.positions()[v as usize]).collect(), true))
+        .collect()
 }
 
 /// Signed area of a closed polygon.
@@ -190,7 +163,7 @@ pub fn girth_ease(
         let other: Option<DVec3> = mirror(id).and_then(|c| body.curves.get(&c)).map(|c| c.polyline.centroid());
         let best = if is_opening(t, name) {
             // an opening (a waistband, a neckline): the garment's boundary loop around the girth
-            boundary_loops(garment)
+            boundary_polylines(garment)
                 .into_iter()
                 .filter(|l| l.contains_projected(&plane, centre))
                 .map(|l| (l.centroid().distance(centre), l))

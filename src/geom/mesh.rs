@@ -6,6 +6,8 @@
 //! every computation here weights by area, so they contribute nothing.
 //! Units are whatever the caller uses; the body layer works in metres.
 
+use std::collections::BTreeMap;
+
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
@@ -330,6 +332,38 @@ impl TriMesh {
             .collect();
         Self::new(out, tris)
     }
+}
+
+/// Boundary loops of a triangle list (vertex ids), each run along its
+/// faces' orientation: chains of half-edges with no opposite half-edge.
+pub fn boundary_loops(triangles: &[[u32; 3]]) -> Vec<Vec<u32>> {
+    let mut directed: BTreeMap<(u32, u32), usize> = BTreeMap::new();
+    for t in triangles {
+        for k in 0..3 {
+            *directed.entry((t[k], t[(k + 1) % 3])).or_default() += 1;
+        }
+    }
+    // boundary half-edges: no opposite half-edge
+    let mut next: BTreeMap<u32, Vec<u32>> = BTreeMap::new();
+    for &(a, b) in directed.keys() {
+        if !directed.contains_key(&(b, a)) {
+            next.entry(a).or_default().push(b);
+        }
+    }
+    let mut loops = Vec::new();
+    while let Some((&start, _)) = next.iter().find(|(_, v)| !v.is_empty()) {
+        let mut lp = vec![start];
+        let mut at = start;
+        while let Some(to) = next.get_mut(&at).and_then(|v| v.pop()) {
+            if to == start {
+                break;
+            }
+            lp.push(to);
+            at = to;
+        }
+        loops.push(lp);
+    }
+    loops
 }
 
 #[cfg(test)]

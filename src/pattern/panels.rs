@@ -30,10 +30,11 @@
 //! (not exactly one boundary loop), a seam edge not on both panels'
 //! outlines, a seam whose edges do not chain.
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::HashMap;
 
 use glam::DVec3;
 
+use crate::geom::mesh::boundary_loops;
 use crate::refine::subdivide::edge_keys;
 use crate::template::format::Template;
 
@@ -476,37 +477,6 @@ fn seam_chain(t: &Template, lineage: &Lineage, seam: &str, edges: &[u32]) -> Res
         tail = next;
     }
     Ok(chain)
-}
-
-/// Boundary loops of a triangle list, each run along its faces' orientation.
-fn boundary_loops(triangles: &[[u32; 3]]) -> Vec<Vec<u32>> {
-    let mut directed: BTreeMap<(u32, u32), usize> = BTreeMap::new();
-    for t in triangles {
-        for k in 0..3 {
-            *directed.entry((t[k], t[(k + 1) % 3])).or_default() += 1;
-        }
-    }
-    // boundary half-edges: no opposite half-edge
-    let mut next: BTreeMap<u32, Vec<u32>> = BTreeMap::new();
-    for &(a, b) in directed.keys() {
-        if !directed.contains_key(&(b, a)) {
-            next.entry(a).or_default().push(b);
-        }
-    }
-    let mut loops = Vec::new();
-    while let Some((&start, _)) = next.iter().find(|(_, v)| !v.is_empty()) {
-        let mut lp = vec![start];
-        let mut at = start;
-        while let Some(to) = next.get_mut(&at).and_then(|v| v.pop()) {
-            if to == start {
-                break;
-            }
-            lp.push(to);
-            at = to;
-        }
-        loops.push(lp);
-    }
-    loops
 }
 
 #[cfg(test)]

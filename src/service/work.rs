@@ -26,7 +26,7 @@ use crate::body::measure::{measure, MeasureOptions};
 use crate::collide::cache::{BodyKey, Obstacle, ObstacleCache};
 use crate::collide::render::{GpuContext, RenderError, RenderOptions};
 use crate::geom::mesh::{TriMesh, VertexId};
-use crate::geom::winding::{penetration_stats, WindingOptions, WindingTree};
+use crate::geom::winding::{WindingOptions, WindingTree};
 use crate::io::gltf::{read_mesh, write_glb, GlbAttribute, GltfError, GltfReadOptions};
 use crate::io::landmarks::{parse_landmarks, LandmarkFileError};
 use crate::mannequin::fit::{fit_size, FitError, FitOptions};
@@ -327,7 +327,7 @@ fn garment_glb(
     sorted.sort_by(f64::total_cmp);
     let pick = |q: f64| sorted.get(((sorted.len().saturating_sub(1)) as f64 * q).round() as usize).copied();
     let inside = ease_mm.iter().filter(|&&e| e < 0.0).count();
-    let penetration = penetration_report(g, body, obstacle);
+    let penetration = obstacle.map(|_| penetration_report(g, body, &ease_mm));
     let fit = serde_json::json!({
         "collision_checked": obstacle.is_some(),
         "distance_to_body_mm": {
@@ -343,20 +343,21 @@ fn garment_glb(
 /// Every garment vertex (fixed ones included) by the exact inside test, the
 /// deepest one with the feature point nearest to it, and the garment/body
 /// triangle pairs that intersect (the exact test of the pipeline's last
-/// surface-clearing round).
-fn penetration_report(g: &Graded, body: &FeatureBody, obstacle: Option<&Obstacle>) -> serde_json::Value {
-    let Some(ob) = obstacle else { return serde_json::Value::Null };
-    let stats = penetration_stats(&ob.tree, &g.mesh.positions);
-    let nearest = stats.deepest_index.and_then(|i| {
+/// surface-clearing round). `ease_mm` is each vertex's signed distance to
+/// the body (negative inside), already computed by the exact test for the GLB.
+fn penetration_report(g: &Graded, body: &FeatureBody, ease_mm: &[f64]) -> serde_json::Value {
+    let inside = ease_mm.iter().filter(|&&e| e < 0.0).count();
+    let deepest = ease_mm.iter().enumerate().filter(|(_, &e)| e < 0.0).min_by(|a, b| a.1.total_cmp(b.1));
+    let nearest = deepest.and_then(|(i, _)| {
         let p = g.mesh.positions[i];
         body.points.iter().min_by(|a, b| a.1.position.distance(p).total_cmp(&b.1.position.distance(p))).map(|(id, q)| {
             serde_json::json!({ "feature_point": id.as_str(), "distance_mm": (q.position.distance(p) * 1e4).round() / 10.0 })
         })
     });
     serde_json::json!({
-        "vertices": stats.total,
-        "vertices_inside": stats.inside,
-        "deepest_mm": (stats.deepest_m * 1e5).round() / 100.0,
+        "vertices": ease_mm.len(),
+        "vertices_inside": inside,
+        "deepest_mm": deepest.map_or(0.0, |(_, &e)| (-e * 100.0).round() / 100.0),
         "deepest_near": nearest,
         "garment_triangles": g.collision.surface.garment_triangles,
         "intersecting_triangle_pairs": g.collision.surface.pairs_after,

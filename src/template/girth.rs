@@ -127,18 +127,11 @@ pub fn eased(loop_: &Polyline, s: f64, radial: f64, plane: &Plane) -> DVec3 {
 /// The ring edges of `curve` in `t` decoded at `positions` (module docs),
 /// `hung` the nodes a hang moved.
 pub fn ring_edges(t: &Template, body: &FeatureBody, positions: &[DVec3], curve: CurveId, hung: &[u32]) -> Vec<u32> {
-    let Some(plane) = girth_plane(body, curve) else { return Vec::new() };
-    let on_ring = |node: u32| -> bool {
-        let Some(n) = t.nodes.get(node as usize) else { return false };
-        let def = point_def(n.point);
-        (def.f1 == curve || def.f2 == curve)
-            && !hung.contains(&node)
-            && positions.get(node as usize).is_some_and(|p| plane.signed_distance(*p).abs() <= RING_PLANE_TOLERANCE_M)
-    };
+    let nodes = ring_nodes(t, body, positions, curve, hung);
     t.edges
         .iter()
         .enumerate()
-        .filter(|(_, e)| !e.profile.is_empty() && on_ring(e.start) && on_ring(e.end))
+        .filter(|(_, e)| !e.profile.is_empty() && nodes.contains(&e.start) && nodes.contains(&e.end))
         .map(|(i, _)| i as u32)
         .collect()
 }
