@@ -30,7 +30,7 @@ use crate::refine::collision::{Collider, CollisionOptions, CollisionReport};
 use crate::refine::subdivide::{refine, relax_tangentially, LevelReport, RefineError, RefineMesh, RefineOptions};
 use crate::template::codec::{decode, CodecError};
 use crate::template::format::Template;
-use crate::template::girth::expected_ease;
+use crate::template::girth::{expected_ease, ring_curves, ring_loop};
 
 /// Knobs of one grade. Levels, clearance, seam allowance and relocation
 /// default to the template's `defaults` where the field is `None`.
@@ -100,6 +100,59 @@ pub struct Graded {
     /// The ease each declared girth should have, mm
     /// ([`crate::template::girth::expected_ease`]).
     pub expected_ease_mm: std::collections::BTreeMap<String, f64>,
+    /// The garment's line at each declared girth that has a ring in the
+    /// template ([`crate::template::girth::ring_loop`]; the left leg's for a
+    /// leg girth): the vertices of `mesh` along the ring's profiles, by
+    /// `ease_mm` name. The ease is measured on it
+    /// ([`crate::body::ease::girth_ease`]).
+    pub girth_lines: std::collections::BTreeMap<String, Vec<u32>>,
+    /// The surface the pattern was cut from (`mesh`'s positions before the
+    /// surface lift, [`ClearOptions::pattern_before_lift`]; else `mesh`'s):
+    /// the garment as made. Its girths are the garment's girths
+    /// ([`crate::body::ease::girth_ease`]); the lift's local bumps over hip
+    /// bones and knees are drape, not cloth length.
+    pub cut_positions: Vec<glam::DVec3>,
+}
+
+impl Graded {
+    /// The garment as cut ([`Self::cut_positions`] on `mesh`'s triangles),
+    /// the surface whose girths the fit report measures.
+    ///
+    /// # Errors
+    /// [`crate::geom::mesh::MeshError`] if a position is not finite.
+    pub fn cut_mesh(&self) -> Result<crate::geom::mesh::TriMesh, crate::geom::mesh::MeshError> {
+        let tris = self.mesh.triangles.iter().map(|t| t.map(crate::geom::mesh::VertexId)).collect();
+        crate::geom::mesh::TriMesh::new(self.cut_positions.clone(), tris)
+    }
+}
+
+/// The vertices of `refined` along each declared girth's ring (module docs of
+/// [`crate::template::girth`]), by `ease_mm` name; `coarse` the decoded node
+/// positions (which nodes are ring nodes).
+fn girth_lines(
+    t: &Template,
+    body: &FeatureBody,
+    coarse: &[glam::DVec3],
+    hung: &[u32],
+    refined: &RefineMesh,
+) -> std::collections::BTreeMap<String, Vec<u32>> {
+    let mut out = std::collections::BTreeMap::new();
+    for name in t.ease_mm.keys() {
+        let Some(&curve) = ring_curves(name).first() else { continue };
+        let ring = ring_loop(t, body, coarse, curve, hung);
+        let mut line: Vec<u32> = ring
+            .edges
+            .iter()
+            .filter_map(|&e| refined.profile_chain(t.edges[e as usize].start, t.edges[e as usize].end))
+            .flatten()
+            .collect();
+        line.sort_unstable();
+        line.dedup();
+        if line.len() >= 3 {
+            out.insert(name.clone(), line);
+        }
+    }
+    out
 }
 
 fn ms(since: Instant) -> f64 {
@@ -127,6 +180,7 @@ pub fn grade(
     let start = Instant::now();
     let mut m0 = decode(t, body, t.defaults.relocation)?;
     let expected_ease_mm = expected_ease(t, body, &m0);
+    let (decoded, hung) = (m0.positions.clone(), m0.hung.clone());
     let edges: Vec<(u32, u32)> = t.edges.iter().map(|e| (e.start, e.end)).collect();
     let clear_start = Instant::now();
     let coarse_clear = match obstacle {
@@ -167,7 +221,11 @@ pub fn grade(
     let cut_from = unlifted.as_deref().unwrap_or(&mesh.positions);
     let pattern = pattern(t, cut_from, &mesh.triangles, levels, size, &pattern_opts)?;
     let pattern_ms = ms(start);
+    let girth_lines = girth_lines(t, body, &decoded, &hung, &mesh);
+    let cut_positions = cut_from.to_vec();
     Ok(Graded {
+        cut_positions,
+        girth_lines,
         mesh,
         levels: level_reports,
         collision,

@@ -46,11 +46,26 @@ const CI_BODIES: usize = 12;
 const SCAN_FACES: usize = 60_000;
 /// Normal noise of the scan-like copies, m.
 const NOISE_M: f64 = 1e-3;
+/// Issue #13's ease bar: measured ease within this of the expected, mm.
+const EASE_TOLERANCE_MM: f64 = 5.0;
 
 /// Grades where the exact outside bars are not met yet, with the evidence
 /// (issue #13 stays open for them; the notes give the figures). Any other
 /// failure fails the test.
 const KNOWN_OPEN: &[(&str, &str, &str)] = &[
+    (
+        "trousers triangles through the body",
+        "pop24-m-heavy-short",
+        "32 pairs left after 12 rounds at the back of the thigh below the buttock (the gluteal fold), \
+         the spot that the crease rule of clear_surface clears on pop12, pop22 and the male-heavy-short \
+         fixture; not yet cleared here",
+    ),
+    ("trousers ease at thigh", "pop03-", THIGH_THROUGH_CROTCH),
+    ("trousers ease at thigh", "pop05-", THIGH_THROUGH_CROTCH),
+    ("trousers ease at thigh", "pop18-", THIGH_THROUGH_CROTCH),
+    ("trousers ease at thigh", "pop24-", THIGH_THROUGH_CROTCH),
+    ("trousers ease at thigh", "pop29-", THIGH_THROUGH_CROTCH),
+    ("trousers ease at thigh", "pop39-", THIGH_THROUGH_CROTCH),
     (
         "trousers",
         "pop04-",
@@ -62,12 +77,6 @@ const KNOWN_OPEN: &[(&str, &str, &str)] = &[
         "pop36-",
         "feature derivation refuses this heavy, short man: the frame at the side neck points is degenerate \
          (triple product −0.014 and −0.009 against the 0.1 floor), so nothing is graded",
-    ),
-    (
-        "fitted-bodice",
-        "pop12-m-heavy-short-scan",
-        "4 crossing pairs left after 12 rounds (largest lift 6.5 mm), none near a crossing of the body's own \
-         surface; not yet diagnosed",
     ),
     (
         "straight-skirt",
@@ -82,6 +91,15 @@ const KNOWN_OPEN: &[(&str, &str, &str)] = &[
          hem over them oscillates between the knees' outer and inner faces",
     ),
 ];
+
+/// Why the thigh ease is off on some bodies: the thigh ring closes through
+/// the crotch node, and its two arcs to it are Eq. (5) copies of the
+/// reference body's, while the offset of the other arcs is solved for the
+/// whole ring as the reference body has it.
+const THIGH_THROUGH_CROTCH: &str = "the thigh ring's arcs to the crotch node are Eq. (5) copies, not refitted \
+     along this body's thigh: heavy thighs come out 5–41 mm under the declared 70 mm, others 7–9 mm over their \
+     expected figure. Refitting them along the body's thigh meets the bar (worst 3.1 mm over all 40 bodies) but \
+     put 2 of 120 fixture trouser pieces over the 3 % strain bar (3.12 and 3.38 %)";
 
 /// The bodies `range` of the population, each as (name, mesh, landmarks) in
 /// both forms.
@@ -204,8 +222,17 @@ fn run(range: std::ops::Range<usize>) {
                 }
                 p95.entry(key.clone()).or_default().see(r.distortion.strain_p95, || at(&r.name));
             }
-            let garment = g.mesh.to_tri_mesh().unwrap();
-            for e in girth_ease(&body, &garment, t, &g.expected_ease_mm, &EaseOptions::default()) {
+            let cut = g.cut_mesh().unwrap();
+            for e in girth_ease(&body, &cut, t, &g.expected_ease_mm, &g.girth_lines, &EaseOptions::default()) {
+                if (e.measured_mm - e.expected_mm).abs() > EASE_TOLERANCE_MM {
+                    failures.push(format!(
+                        "{}: {:.1} mm measured, {:.1} expected ({:.1} declared)",
+                        at(&format!("ease at {}", e.girth)),
+                        e.measured_mm,
+                        e.expected_mm,
+                        e.declared_mm
+                    ));
+                }
                 ease_err
                     .entry((key.clone(), e.girth.clone()))
                     .or_default()

@@ -506,6 +506,29 @@ fn section_plane(curve: CurveId, rule: PlaneRule, pts: &[DVec3], opts: &DeriveOp
     Ok(plane)
 }
 
+/// For a leg girth, the vertical plane midway between its side point and
+/// the other leg's, facing this leg: where the legs touch (heavy thighs,
+/// knees together) the section around one leg runs round both, and the
+/// girth is the part on this leg's side, closed along the plane
+/// ([`Polyline::clipped`]; a tape passed between the thighs). `None` for
+/// other curves, or without the pair.
+fn leg_midplane(id: CurveId, snapped: &BTreeMap<PointId, DVec3>) -> Option<Plane> {
+    use CurveId as C;
+    use PointId as P;
+    let (this, other) = match id {
+        C::ThighLeft => (P::ThighLeft, P::ThighRight),
+        C::ThighRight => (P::ThighRight, P::ThighLeft),
+        C::KneeLeft => (P::KneeLeft, P::KneeRight),
+        C::KneeRight => (P::KneeRight, P::KneeLeft),
+        C::AnkleLeft => (P::AnkleLeft, P::AnkleRight),
+        C::AnkleRight => (P::AnkleRight, P::AnkleLeft),
+        _ => return None,
+    };
+    let (a, b) = (*snapped.get(&this)?, *snapped.get(&other)?);
+    let across = (a - b) * DVec3::new(1.0, 0.0, 1.0);
+    Plane::from_point_normal(0.5 * (a + b), across)
+}
+
 /// One curve by its vocabulary rule, from landmarks already on the surface
 /// (no snapping, no checks beyond the rule's own).
 pub fn derive_curve(
@@ -558,6 +581,14 @@ fn curve_by_rule(
             };
             let mut poly = chosen.clone();
             poly.closed = true;
+            // legs pressed together: the section runs round both; the girth is this
+            // leg's side of the plane midway between the pair
+            if let Some(mid) = leg_midplane(id, snapped) {
+                poly = poly.clipped(&mid).ok_or_else(|| FeatureError::NoSection {
+                    curve: id,
+                    reason: "on its leg's side of the plane midway between the legs".into(),
+                })?;
+            }
             if poly.signed_area(orientation.vector()) < 0.0 {
                 poly = poly.reversed();
             }

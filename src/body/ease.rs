@@ -8,23 +8,29 @@
 //! The body's girth is the tape length of its feature curve
 //! ([`crate::body::measure::girth_of`]): the perimeter of the convex hull of
 //! the curve projected into its section plane `P` (the plane the curve was
-//! cut with; else its least-squares plane). The garment is cut by the same
-//! plane `P` ([`slice`]); among the closed sections, the one whose
-//! projection into `P` contains the body curve's centroid and is the
-//! smallest such is the garment at that girth (a trouser leg around the
-//! left thigh, not the section around both legs); its tape length is the
-//! garment girth. Then
+//! cut with; else its least-squares plane). The garment's girth is the tape
+//! length, in the same plane `P`, of the garment's own line at that girth:
 //!
 //! ```text
-//! ease = tape(garment ∩ P) − tape(body curve)
+//! ease = tape_P(garment line) − tape_P(body curve)
 //! ```
 //!
-//! Where the girth is an *opening* of the garment (every template edge
-//! around it lies on the template's boundary: a waistband, a neckline), the
-//! garment girth is instead the tape length of the garment's boundary loop
-//! around the body curve, in the same plane. For a leg girth, a section
-//! around the other leg's girth too (both legs, above a crotch) is not the
-//! garment at that girth.
+//! - Where the template has a *ring* for the girth
+//!   ([`crate::template::girth::ring_loop`]: the edges between nodes tied to
+//!   the girth's feature points, closed through a node off it where the ring
+//!   does so), the garment line is the refined garment's vertices along the
+//!   ring's profiles (`lines`, [`crate::pipeline::Graded::girth_lines`]), as
+//!   a pattern maker measures a garment on its hip or thigh line. A ring
+//!   that hangs (a skirt's hip below a belly) or closes through the crotch
+//!   lies partly off `P`; it is measured projected into `P`, as the
+//!   expected figure is.
+//! - Else, where the girth is an *opening* of the garment (every template
+//!   edge around it lies on the template's boundary: a waistband, a
+//!   neckline), the garment's boundary loop around the body curve.
+//! - Else the garment is cut by `P` ([`slice`]); among the closed sections,
+//!   the one whose projection into `P` contains the body curve's centroid
+//!   and is the smallest such (a trouser leg around the left thigh, not the
+//!   section around both legs; never one around the other leg's girth too).
 //!
 //! A template's ease entries name girths by their curve (`"hip"` is
 //! `hip_girth`); entries that are not girths (`"hem_flare_radial"`,
@@ -143,12 +149,14 @@ fn area(poly: &[DVec2]) -> f64 {
 /// The ease of `garment` on `body` at every girth `t` declares one for and
 /// the garment covers (module docs), in the template's order of names;
 /// `expected` the ease each should have (`Graded::expected_ease_mm`),
-/// the declared one where absent.
+/// the declared one where absent; `lines` the garment's vertices along each
+/// girth's ring (`Graded::girth_lines`).
 pub fn girth_ease(
     body: &FeatureBody,
     garment: &TriMesh,
     t: &Template,
     expected: &BTreeMap<String, f64>,
+    lines: &BTreeMap<String, Vec<u32>>,
     opts: &EaseOptions,
 ) -> Vec<GirthEase> {
     let round = |x: f64| if opts.round_mm > 0.0 { (x / opts.round_mm).round() * opts.round_mm } else { x };
@@ -161,7 +169,13 @@ pub fn girth_ease(
         let centre: DVec3 = curve.polyline.centroid();
         // the other leg's girth at the same level must not be inside the loop
         let other: Option<DVec3> = mirror(id).and_then(|c| body.curves.get(&c)).map(|c| c.polyline.centroid());
-        let best = if is_opening(t, name) {
+        let ring_line = lines.get(name).map(|ids| {
+            let p = garment.positions();
+            Polyline::new(ids.iter().filter_map(|&v| p.get(v as usize).copied()).collect(), true)
+        });
+        let best = if let Some(l) = ring_line.filter(|l| l.points.len() >= 3) {
+            Some((0.0, l))
+        } else if is_opening(t, name) {
             // an opening (a waistband, a neckline): the garment's boundary loop around the girth
             boundary_polylines(garment)
                 .into_iter()

@@ -268,6 +268,28 @@ impl Polyline {
         0.5 * a.dot(axis)
     }
 
+    /// The part of this loop (taken as closed) on the non-negative side of
+    /// `plane`, by Sutherland–Hodgman clipping against one plane: points
+    /// behind it are dropped, and the loop's crossings of the plane are
+    /// joined along it (a tape passed between two thighs pressed together
+    /// runs along the plane where they meet). `None` if fewer than three
+    /// points are left; the loop itself (closed) where nothing is behind.
+    pub fn clipped(&self, plane: &Plane) -> Option<Polyline> {
+        let n = self.points.len();
+        let mut out = Vec::with_capacity(n + 2);
+        for i in 0..n {
+            let (a, b) = (self.points[i], self.points[(i + 1) % n]);
+            let (da, db) = (plane.signed_distance(a), plane.signed_distance(b));
+            if da >= 0.0 {
+                out.push(a);
+            }
+            if (da >= 0.0) != (db >= 0.0) {
+                out.push(a + (b - a) * (da / (da - db)));
+            }
+        }
+        (out.len() >= 3).then(|| Polyline::new(out, true))
+    }
+
     /// Centroid of the vertices.
     pub fn centroid(&self) -> DVec3 {
         if self.points.is_empty() {
@@ -414,6 +436,30 @@ mod tests {
             (0..n).map(|i| 2.0 * PI * i as f64 / n as f64).map(|t| DVec3::new(r * t.cos(), 0.0, r * t.sin())).collect(),
             true,
         )
+    }
+
+    #[test]
+    fn clipping_a_square_at_its_middle_keeps_half_and_closes_it_on_the_plane() {
+        let sq = Polyline::new(
+            vec![
+                DVec3::new(-1.0, 0.0, -1.0),
+                DVec3::new(1.0, 0.0, -1.0),
+                DVec3::new(1.0, 0.0, 1.0),
+                DVec3::new(-1.0, 0.0, 1.0),
+            ],
+            true,
+        );
+        let right = Plane::from_point_normal(DVec3::ZERO, DVec3::X).unwrap();
+        let half = sq.clipped(&right).unwrap();
+        assert!(half.points.iter().all(|p| p.x >= 0.0));
+        // 2 + 2 + 2 (the square's right half) + 2 along the plane
+        assert!((half.length() - 8.0 / 2.0 - 2.0).abs() < 1e-12, "{}", half.length());
+        // nothing behind: unchanged; everything behind: nothing
+        assert_eq!(
+            sq.clipped(&Plane::from_point_normal(DVec3::X * -2.0, DVec3::X).unwrap()).unwrap().points,
+            sq.points
+        );
+        assert!(sq.clipped(&Plane::from_point_normal(DVec3::X * 2.0, DVec3::X).unwrap()).is_none());
     }
 
     #[test]

@@ -315,6 +315,8 @@ fn garment_glb(
 ) -> Result<(Vec<u8>, serde_json::Value), WorkError> {
     let tris: Vec<[VertexId; 3]> = g.mesh.triangles.iter().map(|t| t.map(VertexId)).collect();
     let mesh = TriMesh::new(g.mesh.positions.clone(), tris).map_err(|e| WorkError::GarmentGlb(GltfError::Mesh(e)))?;
+    // girths are measured on the garment as cut (the pattern's surface)
+    let cut = g.cut_mesh().map_err(|e| WorkError::GarmentGlb(GltfError::Mesh(e)))?;
     let ease_mm: Vec<f64> = match obstacle {
         Some(ob) => g.mesh.positions.iter().map(|&p| -ob.tree.signed_depth(p) * 1e3).collect(),
         None => vec![0.0; g.mesh.positions.len()],
@@ -335,7 +337,7 @@ fn garment_glb(
         },
         "vertices_inside_body": inside,
         "penetration": penetration,
-        "girth_ease": girth_ease(body, &mesh, t, &g.expected_ease_mm, &EaseOptions::default()),
+        "girth_ease": girth_ease(body, &cut, t, &g.expected_ease_mm, &g.girth_lines, &EaseOptions::default()),
     });
     Ok((glb, fit))
 }

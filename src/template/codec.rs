@@ -267,6 +267,17 @@ pub fn encode(draft: &Draft, body: &FeatureBody) -> Result<Template, CodecError>
         defaults: draft.defaults.clone(),
     };
     t.validate()?;
+    // store the ring profiles as decoding builds them on this body (a hung ring's
+    // arcs bent onto its hung nodes), so that decode ∘ encode is exact here
+    let mut t = t;
+    if t.defaults.relocation == Relocation::Eq1Frame {
+        let m = decode(&t, body, Relocation::Eq1Frame)?;
+        for (e, p) in t.edges.iter_mut().zip(&m.profiles) {
+            if let Some(p) = p {
+                e.profile = p.points().iter().map(|q| q.to_array()).collect();
+            }
+        }
+    }
     Ok(t)
 }
 
@@ -337,8 +348,9 @@ pub fn decode(t: &Template, body: &FeatureBody, relocation: Relocation) -> Resul
     // ring nodes on the body's eased girths (as authored), then the hangs from there
     let eq1 = relocation == Relocation::Eq1Frame;
     if eq1 {
-        place_ring_nodes(t, body, &mut positions, &[]);
+        place_ring_nodes(t, body, &mut positions);
     }
+    let placed = positions.clone();
     let hung = hang(&t.hangs, body, &mut positions);
     let triangles = (0..t.faces.len()).map(|f| t.face_nodes(f)).collect();
     let mut profiles = Vec::with_capacity(t.edges.len());
@@ -357,7 +369,7 @@ pub fn decode(t: &Template, body: &FeatureBody, relocation: Relocation) -> Resul
     }
     // ring edges follow the body's eased girth, as on the reference body (ease as declared)
     if eq1 {
-        refit_rings(t, body, &positions, &mut profiles, &hung)
+        refit_rings(t, body, &placed, &positions, &mut profiles, &hung)
             .map_err(|(edge, source)| CodecError::Profile { edge, source })?;
     }
     Ok(CoarseMesh { positions, triangles, profiles, hung })

@@ -192,11 +192,22 @@ impl<'a> Builder<'a> {
         let plane = girth::girth_plane(self.body, curve).ok_or_else(|| AuthorError::Missing(curve.to_string()))?;
         let loop_ = girth::bridged(self.curve(curve)?, &plane);
         let mut params = Vec::with_capacity(points.len());
-        for id in points {
-            let p = self.point(*id)?;
+        for (k, id) in points.iter().enumerate() {
+            // the node off the girth sits at the loop's point nearest to it, as decoding finds it
+            let p = match through {
+                Some((at, node)) if at == k => self.draft.positions[node as usize],
+                _ => self.point(*id)?,
+            };
             params.push(loop_.closest(p).map_or(0.0, |c| c.s));
         }
-        let radial = girth::ring_radial(&loop_, &plane, ease_mm * MM);
+        // the declared ease on the tape of the ring as its profiles sample it, a node
+        // off the girth (the crotch) included
+        let ends: Vec<Option<DVec3>> = (0..points.len())
+            .map(|k| through.and_then(|(at, node)| (k == at).then(|| self.draft.positions[node as usize])))
+            .collect();
+        let counts = vec![self.profile_points; points.len()];
+        let radial = girth::sampled_radial(&loop_, &plane, ease_mm * MM, &params, &ends, &counts)
+            .max(girth::ring_radial(&loop_, &plane, ease_mm * MM));
         let nodes: Vec<u32> = params
             .iter()
             .zip(points)
@@ -206,21 +217,10 @@ impl<'a> Builder<'a> {
                 _ => self.node(girth::eased(&loop_, t, radial, &plane), Some(tie)),
             })
             .collect();
+        let arcs = girth::ring_arcs(&loop_, &plane, &params, &ends, &counts, radial);
         let ring = Ring { nodes, curve: loop_, params, radial, plane };
-        for i in 0..ring.nodes.len() {
+        for (i, pts) in arcs.into_iter().enumerate() {
             let j = (i + 1) % ring.nodes.len();
-            let mut pts = self.ring_arc(&ring, ring.params[i], ring.params[j]);
-            let last = pts.len() - 1;
-            for (end, from_start) in [(i, true), (j, false)] {
-                if through.is_some_and(|(at, _)| at == end) {
-                    let shift =
-                        self.draft.positions[ring.nodes[end] as usize] - if from_start { pts[0] } else { pts[last] };
-                    for (k, p) in pts.iter_mut().enumerate() {
-                        let w = k as f64 / last as f64;
-                        *p += shift * if from_start { 1.0 - w } else { w };
-                    }
-                }
-            }
             self.draft.profiles.push(((ring.nodes[i], ring.nodes[j]), pts));
         }
         Ok(ring)
