@@ -136,16 +136,21 @@ fn girth_lines(
     hung: &[u32],
     refined: &RefineMesh,
 ) -> std::collections::BTreeMap<String, Vec<u32>> {
+    // every ring's template edges, then all their refined chains in one pass
+    let rings: Vec<(&String, Vec<(u32, u32)>)> = t
+        .ease_mm
+        .keys()
+        .filter_map(|name| {
+            let &curve = ring_curves(name).first()?;
+            let ring = ring_loop(t, body, coarse, curve, hung);
+            Some((name, ring.edges.iter().map(|&e| (t.edges[e as usize].start, t.edges[e as usize].end)).collect()))
+        })
+        .collect();
+    let pairs: Vec<(u32, u32)> = rings.iter().flat_map(|r| r.1.iter().copied()).collect();
+    let mut chains = refined.profile_chains(&pairs).into_iter();
     let mut out = std::collections::BTreeMap::new();
-    for name in t.ease_mm.keys() {
-        let Some(&curve) = ring_curves(name).first() else { continue };
-        let ring = ring_loop(t, body, coarse, curve, hung);
-        let mut line: Vec<u32> = ring
-            .edges
-            .iter()
-            .filter_map(|&e| refined.profile_chain(t.edges[e as usize].start, t.edges[e as usize].end))
-            .flatten()
-            .collect();
+    for (name, edges) in rings {
+        let mut line: Vec<u32> = chains.by_ref().take(edges.len()).flatten().flatten().collect();
         line.sort_unstable();
         line.dedup();
         if line.len() >= 3 {

@@ -271,36 +271,40 @@ pub struct LevelReport {
 }
 
 impl RefineMesh {
-    /// The vertices along the refined profile of the coarse edge `a`–`b`
-    /// (splits keep old ids, and every split of a profiled edge is profiled
-    /// again), from `a` to `b`: the shortest path between them over profiled
-    /// edges (breadth first). `None` where no profiled path joins them.
-    pub fn profile_chain(&self, a: u32, b: u32) -> Option<Vec<u32>> {
+    /// The vertices along the refined profile of each coarse edge `a`–`b`
+    /// of `pairs` (splits keep old ids, and every split of a profiled edge
+    /// is profiled again), from `a` to `b`: the shortest path between them
+    /// over profiled edges (breadth first; the adjacency is built once).
+    /// `None` where no profiled path joins them.
+    pub fn profile_chains(&self, pairs: &[(u32, u32)]) -> Vec<Option<Vec<u32>>> {
         let mut next: BTreeMap<u32, Vec<u32>> = BTreeMap::new();
         for &(x, y) in self.edge_profiles.keys() {
             next.entry(x).or_default().push(y);
             next.entry(y).or_default().push(x);
         }
-        let mut came: BTreeMap<u32, u32> = BTreeMap::from([(a, a)]);
-        let mut queue = std::collections::VecDeque::from([a]);
-        while let Some(v) = queue.pop_front() {
-            if v == b {
-                let (mut path, mut at) = (vec![b], b);
-                while at != a {
-                    at = *came.get(&at)?;
-                    path.push(at);
+        let chain = |a: u32, b: u32| -> Option<Vec<u32>> {
+            let mut came: BTreeMap<u32, u32> = BTreeMap::from([(a, a)]);
+            let mut queue = std::collections::VecDeque::from([a]);
+            while let Some(v) = queue.pop_front() {
+                if v == b {
+                    let (mut path, mut at) = (vec![b], b);
+                    while at != a {
+                        at = *came.get(&at)?;
+                        path.push(at);
+                    }
+                    path.reverse();
+                    return Some(path);
                 }
-                path.reverse();
-                return Some(path);
-            }
-            for &w in next.get(&v).into_iter().flatten() {
-                if let std::collections::btree_map::Entry::Vacant(e) = came.entry(w) {
-                    e.insert(v);
-                    queue.push_back(w);
+                for &w in next.get(&v).into_iter().flatten() {
+                    if let std::collections::btree_map::Entry::Vacant(e) = came.entry(w) {
+                        e.insert(v);
+                        queue.push_back(w);
+                    }
                 }
             }
-        }
-        None
+            None
+        };
+        pairs.iter().map(|&(a, b)| chain(a, b)).collect()
     }
 
     /// The mesh as a validated [`TriMesh`] (for measurements and exports).

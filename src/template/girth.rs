@@ -133,7 +133,11 @@ pub fn eased(loop_: &Polyline, s: f64, radial: f64, plane: &Plane) -> DVec3 {
 /// The ring edges of `curve` in `t` decoded at `positions` (module docs),
 /// `hung` the nodes a hang moved ([`ring_nodes`]).
 pub fn ring_edges(t: &Template, body: &FeatureBody, positions: &[DVec3], curve: CurveId, hung: &[u32]) -> Vec<u32> {
-    let nodes = ring_nodes(t, body, positions, curve, hung);
+    edges_between(t, &ring_nodes(t, body, positions, curve, hung))
+}
+
+/// The profiled template edges with both nodes in `nodes`.
+fn edges_between(t: &Template, nodes: &[u32]) -> Vec<u32> {
     t.edges
         .iter()
         .enumerate()
@@ -171,7 +175,7 @@ fn profiled_edge(t: &Template, a: u32, b: u32) -> Option<u32> {
 /// nearest the girth's plane when several do).
 pub fn ring_loop(t: &Template, body: &FeatureBody, positions: &[DVec3], curve: CurveId, hung: &[u32]) -> RingLoop {
     let nodes = ring_nodes(t, body, positions, curve, hung);
-    let mut edges = ring_edges(t, body, positions, curve, hung);
+    let mut edges = edges_between(t, &nodes);
     let mut degree: std::collections::BTreeMap<u32, usize> = nodes.iter().map(|&n| (n, 0)).collect();
     for &e in &edges {
         let e = &t.edges[e as usize];
@@ -194,11 +198,56 @@ pub fn ring_loop(t: &Template, body: &FeatureBody, positions: &[DVec3], curve: C
     RingLoop { nodes, edges, through: through.map(|(x, _, _)| x) }
 }
 
+/// The forward arc length from `s0` to `s1` round a closed loop of length
+/// `total`, or the backward one (negative) where that is shorter.
+pub fn shorter_way(s0: f64, s1: f64, total: f64) -> f64 {
+    let fwd = (s1 - s0).rem_euclid(total);
+    if fwd <= 0.5 * total {
+        fwd
+    } else {
+        fwd - total
+    }
+}
+
+/// `n` points of `loop_` eased by `radial` within `plane` from arc
+/// parameter `s0` over `ds` (signed), the ends bent onto `ends` where given
+/// (a node off the loop: a linear blend along the arc,
+/// `Q_j += (1 − w_j)·(e_0 − Q_0) + w_j·(e_1 − Q_{n−1})`, and the end points
+/// set exactly).
+pub fn eased_arc(
+    loop_: &Polyline,
+    plane: &Plane,
+    s0: f64,
+    ds: f64,
+    n: usize,
+    radial: f64,
+    ends: (Option<DVec3>, Option<DVec3>),
+) -> Vec<DVec3> {
+    let n = n.max(2);
+    let mut pts: Vec<DVec3> =
+        (0..n).map(|i| eased(loop_, s0 + ds * i as f64 / (n - 1) as f64, radial, plane)).collect();
+    let shift_a = ends.0.map_or(DVec3::ZERO, |e| e - pts[0]);
+    let shift_b = ends.1.map_or(DVec3::ZERO, |e| e - pts[n - 1]);
+    if ends.0.is_some() || ends.1.is_some() {
+        for (i, p) in pts.iter_mut().enumerate() {
+            let w = i as f64 / (n - 1) as f64;
+            *p += shift_a * (1.0 - w) + shift_b * w;
+        }
+    }
+    // exactly on the given ends (the blend is exact only up to rounding)
+    if let Some(e) = ends.0 {
+        pts[0] = e;
+    }
+    if let Some(e) = ends.1 {
+        pts[n - 1] = e;
+    }
+    pts
+}
+
 /// The arcs of a ring on `loop_` eased by `radial` within `plane`: arc `k`
 /// runs the shorter way round the loop from `params[k]` to `params[k + 1]`
 /// (cyclically), sampled at `counts[k]` points, its ends bent onto
-/// `ends[k]` and `ends[k + 1]` where given (a node off the loop: a linear
-/// blend along the arc, `Q_j += (1 − w_j)·(e_k − Q_0) + w_j·(e_{k+1} − Q_{n−1})`).
+/// `ends[k]` and `ends[k + 1]` where given ([`eased_arc`]).
 pub fn ring_arcs(
     loop_: &Polyline,
     plane: &Plane,
@@ -209,28 +258,12 @@ pub fn ring_arcs(
 ) -> Vec<Vec<DVec3>> {
     let total = loop_.length();
     let m = params.len();
+    let end = |k: usize| ends.get(k).copied().flatten();
     (0..m)
         .map(|k| {
             let j = (k + 1) % m;
-            let n = counts.get(k).copied().unwrap_or(2).max(2);
-            let fwd = (params[j] - params[k]).rem_euclid(total);
-            let d = if fwd <= 0.5 * total { fwd } else { fwd - total };
-            let mut pts: Vec<DVec3> =
-                (0..n).map(|i| eased(loop_, params[k] + d * i as f64 / (n - 1) as f64, radial, plane)).collect();
-            let shift_a = ends.get(k).copied().flatten().map_or(DVec3::ZERO, |e| e - pts[0]);
-            let shift_b = ends.get(j).copied().flatten().map_or(DVec3::ZERO, |e| e - pts[n - 1]);
-            for (i, p) in pts.iter_mut().enumerate() {
-                let w = i as f64 / (n - 1) as f64;
-                *p += shift_a * (1.0 - w) + shift_b * w;
-            }
-            // exactly on the given ends (the blend is exact only up to rounding)
-            if let Some(e) = ends.get(k).copied().flatten() {
-                pts[0] = e;
-            }
-            if let Some(e) = ends.get(j).copied().flatten() {
-                pts[n - 1] = e;
-            }
-            pts
+            let n = counts.get(k).copied().unwrap_or(2);
+            eased_arc(loop_, plane, params[k], shorter_way(params[k], params[j], total), n, radial, (end(k), end(j)))
         })
         .collect()
 }
@@ -486,25 +519,15 @@ pub fn refit_rings(
                 continue;
             }
             let Some(old) = profiles.get(edge as usize).and_then(|p| p.as_ref()) else { continue };
-            let n = old.points().len().max(2);
+            let n = old.points().len();
             let param = |node: u32| -> Option<f64> {
                 let q = body.points.get(&t.nodes[node as usize].point)?.position;
                 Some(loop_.closest(q)?.s)
             };
             let (Some(sa), Some(sb)) = (param(e.start), param(e.end)) else { continue };
             // the ring runs the shorter way round between neighbouring nodes
-            let fwd = (sb - sa).rem_euclid(total);
-            let ds = if fwd <= 0.5 * total { fwd } else { fwd - total };
-            let mut pts: Vec<DVec3> =
-                (0..n).map(|k| eased(loop_, sa + ds * k as f64 / (n - 1) as f64, radial, plane)).collect();
-            let (pa, pb) = (positions[e.start as usize], positions[e.end as usize]);
-            let (shift_a, shift_b) = (pa - pts[0], pb - pts[n - 1]);
-            for (k, p) in pts.iter_mut().enumerate() {
-                let w = k as f64 / (n - 1) as f64;
-                *p += shift_a * (1.0 - w) + shift_b * w;
-            }
-            pts[0] = pa;
-            pts[n - 1] = pb;
+            let ends = (Some(positions[e.start as usize]), Some(positions[e.end as usize]));
+            let pts = eased_arc(loop_, plane, sa, shorter_way(sa, sb, total), n, radial, ends);
             profiles[edge as usize] = Some(Profile::new(pts).map_err(|err| (edge, err))?);
             refitted += 1;
         }

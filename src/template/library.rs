@@ -228,12 +228,8 @@ impl<'a> Builder<'a> {
 
     /// Profile points along a ring's eased girth from `s0` forward to `s1`.
     fn ring_arc(&self, ring: &Ring, s0: f64, s1: f64) -> Vec<DVec3> {
-        let total = ring.curve.length();
-        let d = (s1 - s0).rem_euclid(total);
-        let n = self.profile_points;
-        (0..n)
-            .map(|k| girth::eased(&ring.curve, s0 + d * k as f64 / (n - 1) as f64, ring.radial, &ring.plane))
-            .collect()
+        let d = (s1 - s0).rem_euclid(ring.curve.length());
+        girth::eased_arc(&ring.curve, &ring.plane, s0, d, self.profile_points, ring.radial, (None, None))
     }
 
     /// A profile along a feature line between the nodes `a` and `b`,
