@@ -3,7 +3,8 @@
 //! garment/body triangle pairs by height and side, the feature point nearest
 //! each, and whether the body mesh crosses itself there.
 //!
-//! `cargo run --release --example clear_probe -- [template] [body substring]`
+//! `cargo run --release --example clear_probe -- [template] [body substring | popNN | popNN-scan]`
+//! (`CLEAR='{"max_rounds":24}'` overrides the surface clearing's options)
 
 use std::path::Path;
 
@@ -27,13 +28,20 @@ fn main() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures");
     let library = builtin().unwrap();
     let mut jobs: Vec<(String, grade3d::geom::mesh::TriMesh, grade3d::body::derive::Landmarks)> = Vec::new();
-    if let Some(i) = only.strip_prefix("pop").and_then(|n| n.parse::<usize>().ok()) {
-        // a body of issue #13's population (tests/population.rs: seed 13)
+    let scan = only.ends_with("-scan");
+    if let Some(i) = only.strip_prefix("pop").and_then(|n| n.trim_end_matches("-scan").parse::<usize>().ok()) {
+        // a body of issue #13's population (tests/population.rs: seed 13), "popNN-scan" its scan-like copy
         let model = grade3d::mannequin::model::BodyModel::embedded().unwrap();
         let b = &grade3d::mannequin::population::sample_population(40, 13)[i];
         let mesh = model.build(&b.params).unwrap();
-        let lm = grade3d::mannequin::landmarks::hm08_landmarks(model, &mesh, &Default::default()).unwrap();
-        jobs.push((b.name.clone(), mesh, lm));
+        let mut lm = grade3d::mannequin::landmarks::hm08_landmarks(model, &mesh, &Default::default()).unwrap();
+        if scan {
+            let copy = grade3d::mannequin::population::scan_like(&mesh, 60_000, 1e-3, 13 ^ i as u64).unwrap();
+            lm.curves.clear();
+            jobs.push((format!("{}-scan", b.name), copy, lm));
+        } else {
+            jobs.push((b.name.clone(), mesh, lm));
+        }
     }
     for sub in ["bodies", "astm"] {
         if !jobs.is_empty() {
@@ -71,7 +79,11 @@ fn main() {
             let maps = gpu.render(&body.mesh, &RenderOptions::default()).unwrap();
             let obstacle = Obstacle { maps, tree };
             for t in library.iter().filter(|t| t.name.contains(which.as_str())) {
-                let g = grade(t, &body, Some(&obstacle), &name, &GradeOptions::default()).unwrap();
+                let mut go = GradeOptions::default();
+                if let Ok(c) = std::env::var("CLEAR") {
+                    go.clear = serde_json::from_str(&c).unwrap();
+                }
+                let g = grade(t, &body, Some(&obstacle), &name, &go).unwrap();
                 let s = g.collision.surface;
                 eprintln!("  {}: {s:?} clear {:.0} ms coarse {:?}", t.name, g.timings.clear_ms, g.collision.coarse);
                 let pairs = intersecting_pairs(&obstacle.tree, &g.mesh.positions, &g.mesh.triangles);

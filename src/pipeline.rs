@@ -184,7 +184,6 @@ pub fn grade(
 
     let start = Instant::now();
     let mut m0 = decode(t, body, t.defaults.relocation)?;
-    let expected_ease_mm = expected_ease(t, body, &m0);
     let (decoded, hung) = (m0.positions.clone(), m0.hung.clone());
     let edges: Vec<(u32, u32)> = t.edges.iter().map(|e| (e.start, e.end)).collect();
     let clear_start = Instant::now();
@@ -193,6 +192,7 @@ pub fn grade(
         None => Default::default(),
     };
     let coarse_ms = ms(clear_start);
+    let expected_ease_mm = expected_ease(t, body, &m0);
     let mut surface_ms = 0.0;
     let mut unlifted = None;
     let coarse = RefineMesh::from_coarse(&m0, &edges)?;

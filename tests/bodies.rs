@@ -276,6 +276,24 @@ fn front_landmark_off_the_centre_line_is_refused() {
 }
 
 #[test]
+fn thigh_landmark_above_the_crotch_is_refused() {
+    let (_, mesh, mut lm) = fixture_bodies().swap_remove(1);
+    // the left thigh point moved up the side of the leg to 20 mm above the crotch
+    let crotch = lm.points[&PointId::Crotch];
+    let t = lm.points[&PointId::ThighLeft];
+    let up = grade3d::geom::query::closest_point(&mesh, DVec3::new(t.x, crotch.y + 0.02, t.z)).point;
+    lm.points.insert(PointId::ThighLeft, up);
+    let e = derive_features(mesh, &lm, &DeriveOptions::default()).unwrap_err();
+    match e {
+        FeatureError::LandmarkHeight { point, other, gap_mm, side, must, .. } => {
+            assert_eq!((point, other, side, must), (PointId::ThighLeft, PointId::Crotch, "above", "below"), "{e}");
+            assert!((10.0..=30.0).contains(&gap_mm), "{e}");
+        }
+        e => panic!("expected LandmarkHeight, got {e}"),
+    }
+}
+
+#[test]
 fn armscye_longer_than_the_chest_is_refused() {
     let (_, mesh, mut lm) = fixture_bodies().swap_remove(1);
     // the chest girth given as the left armscye: an armscye as long as the bust
@@ -297,7 +315,7 @@ fn armscye_section_through_the_torso_is_refused() {
     // the underarm point moved towards the midline: the armscye plane (through the
     // shoulder and underarm points, containing the depth axis) cuts into the torso
     let u = lm.points[&PointId::UnderarmLeft];
-    let inward = grade3d::geom::query::closest_point(&mesh, DVec3::new(0.3 * u.x, u.y - 0.05, u.z)).point;
+    let inward = grade3d::geom::query::closest_point(&mesh, DVec3::new(0.3 * u.x, u.y - 0.02, u.z)).point;
     lm.points.insert(PointId::UnderarmLeft, inward);
     let e = derive_features(mesh, &lm, &DeriveOptions::default()).unwrap_err();
     match e {

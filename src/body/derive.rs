@@ -11,7 +11,10 @@
 //!    [`DeriveOptions::max_landmark_offset_mm`] is rejected.
 //!    **Plausibility**: every centre-front/back landmark given lies within
 //!    [`DeriveOptions::max_midline_offset_mm`] of the mid-sagittal plane of
-//!    the left/right landmark pairs ([`FeatureError::OffMidline`]).
+//!    the left/right landmark pairs ([`FeatureError::OffMidline`]); the
+//!    landmarks lie in their order up the body, ankle to knee to thigh to
+//!    crotch, crotch to hip to waist to bust to underarm to shoulder
+//!    ([`FeatureError::LandmarkHeight`]: a girth off its landmark's height).
 //! 3. **Curves** (unless given as polylines): each curve by its rule in
 //!    [`vocab::CURVES`] — a *section* is a plane section of the mesh
 //!    ([`crate::geom::slice`]), the loop chosen as the one enclosing the
@@ -228,6 +231,24 @@ pub enum FeatureError {
         /// The rule that bounds it.
         reason: String,
     },
+    /// A landmark lies on the wrong side (in height) of another: a girth
+    /// off its landmark's height (a thigh girth above the crotch runs round
+    /// both legs; a waist below the hip is a mislabelled point).
+    #[error("landmark `{point}` lies {gap_mm:.0} mm {side} `{other}`; it must lie {must} it ({reason})")]
+    LandmarkHeight {
+        /// The landmark.
+        point: PointId,
+        /// The landmark it is checked against.
+        other: PointId,
+        /// How far it lies on the wrong side, mm.
+        gap_mm: f64,
+        /// Where it lies: "above" or "below".
+        side: &'static str,
+        /// Where it must lie: "below" or "above".
+        must: &'static str,
+        /// The rule.
+        reason: &'static str,
+    },
     /// The frame at a point is (nearly) degenerate.
     #[error("degenerate frame at `{point}`: |t(f1)·(t(f2)×n)| = {triple:.3} < {min}")]
     DegenerateFrame {
@@ -286,6 +307,7 @@ pub fn derive_features(
         snapped.insert(id, sp.point);
     }
     check_midline(&snapped, opts)?;
+    check_heights(&snapped)?;
 
     let mut curves = BTreeMap::new();
     for def in vocab::CURVES {
@@ -381,6 +403,54 @@ fn check_midline(snapped: &BTreeMap<PointId, DVec3>, opts: &DeriveOptions) -> Re
         let offset_mm = plane.signed_distance(p).abs() * MM_PER_M;
         if offset_mm > opts.max_midline_offset_mm {
             return Err(FeatureError::OffMidline { point: id, offset_mm, limit_mm: opts.max_midline_offset_mm });
+        }
+    }
+    Ok(())
+}
+
+/// Landmarks that lie below others (up is +Y), with the rule: `(lower,
+/// upper, why)`. Each pair given is checked.
+const BELOW: [(PointId, PointId, &str); 16] = {
+    use PointId as P;
+    const LEG: &str = "ankle, knee and thigh girths lie in that order up the leg";
+    const THIGH: &str =
+        "a thigh girth is measured below the crotch (ISO 8559-1 5.3.20); above it, it runs round both legs";
+    const TORSO: &str = "crotch, hip, waist, bust, underarm and shoulder lie in that order up the body";
+    [
+        (P::AnkleLeft, P::KneeLeft, LEG),
+        (P::AnkleRight, P::KneeRight, LEG),
+        (P::KneeLeft, P::ThighLeft, LEG),
+        (P::KneeRight, P::ThighRight, LEG),
+        (P::ThighLeft, P::Crotch, THIGH),
+        (P::ThighRight, P::Crotch, THIGH),
+        (P::Crotch, P::HipLeft, TORSO),
+        (P::Crotch, P::HipRight, TORSO),
+        (P::HipLeft, P::WaistLeft, TORSO),
+        (P::HipRight, P::WaistRight, TORSO),
+        (P::WaistLeft, P::BustLeft, TORSO),
+        (P::WaistRight, P::BustRight, TORSO),
+        (P::BustLeft, P::UnderarmLeft, TORSO),
+        (P::BustRight, P::UnderarmRight, TORSO),
+        (P::UnderarmLeft, P::ShoulderLeft, TORSO),
+        (P::UnderarmRight, P::ShoulderRight, TORSO),
+    ]
+};
+
+/// Plausibility of the landmarks' heights ([`BELOW`]): a girth off its
+/// landmark's height is refused, naming both landmarks and the gap
+/// ([`FeatureError::LandmarkHeight`]).
+fn check_heights(snapped: &BTreeMap<PointId, DVec3>) -> Result<(), FeatureError> {
+    for (lower, upper, reason) in BELOW {
+        let (Some(l), Some(u)) = (snapped.get(&lower), snapped.get(&upper)) else { continue };
+        if l.y > u.y {
+            return Err(FeatureError::LandmarkHeight {
+                point: lower,
+                other: upper,
+                gap_mm: (l.y - u.y) * MM_PER_M,
+                side: "above",
+                must: "below",
+                reason,
+            });
         }
     }
     Ok(())

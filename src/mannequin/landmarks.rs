@@ -16,6 +16,10 @@
 //! * limb points: the outer crossing of the thigh, knee and ankle rings
 //!   with the coronal plane through their centroids (the rings are on the
 //!   left leg; the right leg's are their mirror images, `hm08.mirror`);
+//!   a thigh point that would lie above
+//!   [`Hm08LandmarkOptions::thigh_below_crotch_mm`] below the crotch comes
+//!   from the leg's horizontal section at that depth instead (a thigh girth
+//!   lies below the crotch);
 //! * shoulder points: the lateral vertex of MakeHuman's `shoulder-dist`
 //!   measure (the acromion) and its mirror;
 //! * crotch: the lowest vertex on the sagittal plane (its own mirror);
@@ -44,11 +48,21 @@ pub struct Hm08LandmarkOptions {
     /// through the side neck points, degrees (the front neck point lies
     /// below the cervicale). Default 25.
     pub neck_base_tilt_deg: f64,
+    /// How far below the crotch the thigh points lie at least, mm. ISO
+    /// 8559-1 measures the thigh girth just below the gluteal fold, so
+    /// below the crotch; on heavy, short bodies MakeHuman's `thigh-circ`
+    /// ring rides up to 14 mm *above* the crotch (it follows the topology,
+    /// and the crotch sinks between full thighs), and its section there
+    /// runs round both legs. The thigh points then come from the leg's
+    /// horizontal section at this depth below the crotch instead. Default
+    /// 10 (the fixtures' rings lie 14–57 mm below the crotch and keep
+    /// their points).
+    pub thigh_below_crotch_mm: f64,
 }
 
 impl Default for Hm08LandmarkOptions {
     fn default() -> Self {
-        Self { neck_base_tilt_deg: 25.0 }
+        Self { neck_base_tilt_deg: 25.0, thigh_below_crotch_mm: 10.0 }
     }
 }
 
@@ -162,6 +176,15 @@ pub fn hm08_landmarks(
     lm.points.insert(PointId::NeckBack, extreme(&mid, |p| -p.z).ok_or_else(|| err(PointId::NeckBack, "no back"))?);
     lm.points.insert(PointId::NeckLeft, nl);
     lm.points.insert(PointId::NeckRight, nr);
+    // crotch: lowest vertex on the sagittal plane (mirror of itself)
+    let crotch = (0..mesh.vertex_count() as u32)
+        .map(VertexId)
+        .filter(|&v| model.mirror(v) == v)
+        .map(|v| mesh.position(v))
+        .min_by(|a, b| a.y.total_cmp(&b.y))
+        .ok_or_else(|| err(PointId::Crotch, "no vertex on the sagittal plane"))?;
+    lm.points.insert(PointId::Crotch, crotch);
+    let thigh_top = crotch.y - opts.thigh_below_crotch_mm * 1e-3;
     let limbs = [
         ("thigh-circ", PointId::ThighLeft, PointId::ThighRight),
         ("knee-circ", PointId::KneeLeft, PointId::KneeRight),
@@ -175,8 +198,19 @@ pub fn hm08_landmarks(
         let (rl, rr) = if rl.centroid().x >= rr.centroid().x { (rl, rr) } else { (rr, rl) };
         let cl = plane_crossings(&rl, &Plane { normal: DVec3::Z, offset: rl.centroid().z });
         let cr = plane_crossings(&rr, &Plane { normal: DVec3::Z, offset: rr.centroid().z });
-        lm.points.insert(left, extreme(&cl, |p| p.x).ok_or_else(|| err(left, "ring misses its coronal plane"))?);
-        lm.points.insert(right, extreme(&cr, |p| -p.x).ok_or_else(|| err(right, "ring misses its coronal plane"))?);
+        let mut pl = extreme(&cl, |p| p.x).ok_or_else(|| err(left, "ring misses its coronal plane"))?;
+        let mut pr = extreme(&cr, |p| -p.x).ok_or_else(|| err(right, "ring misses its coronal plane"))?;
+        if left == PointId::ThighLeft {
+            // the thigh girth lies below the crotch (ISO 8559-1 5.3.20)
+            if pl.y > thigh_top {
+                pl = outer_point_at(mesh, thigh_top, pl, rl.centroid().z, 1.0).ok_or_else(|| err(left, BELOW))?;
+            }
+            if pr.y > thigh_top {
+                pr = outer_point_at(mesh, thigh_top, pr, rr.centroid().z, -1.0).ok_or_else(|| err(right, BELOW))?;
+            }
+        }
+        lm.points.insert(left, pl);
+        lm.points.insert(right, pr);
     }
     // shoulders: the lateral end of MakeHuman's shoulder-dist measure
     let sd = ring_ids("shoulder-dist");
@@ -189,14 +223,6 @@ pub fn hm08_landmarks(
     let (sl, sr) = if sl.x >= sr.x { (sl, sr) } else { (sr, sl) };
     lm.points.insert(PointId::ShoulderLeft, sl);
     lm.points.insert(PointId::ShoulderRight, sr);
-    // crotch: lowest vertex on the sagittal plane (mirror of itself)
-    let crotch = (0..mesh.vertex_count() as u32)
-        .map(VertexId)
-        .filter(|&v| model.mirror(v) == v)
-        .map(|v| mesh.position(v))
-        .min_by(|a, b| a.y.total_cmp(&b.y))
-        .ok_or_else(|| err(PointId::Crotch, "no vertex on the sagittal plane"))?;
-    lm.points.insert(PointId::Crotch, crotch);
     // armpits: on the coronal section through the upper arm
     let arm_z = ring(mesh, ring_ids("upperarm-circ")).centroid().z;
     for (bust, id, sign) in
@@ -206,6 +232,22 @@ pub fn hm08_landmarks(
         lm.points.insert(id, armpit(mesh, arm_z, start_y, sign).ok_or_else(|| err(id, "no armpit above the bust"))?);
     }
     Ok(lm)
+}
+
+/// Why a thigh point below the crotch was not found.
+const BELOW: &str = "no section of the leg below the crotch";
+
+/// The outer point (`sign` +1: largest x, −1: smallest) where the loop of
+/// the horizontal section at height `y` nearest to `near` crosses the
+/// coronal plane `z = z`: the loop round the leg, or round both legs where
+/// they touch (its outer crossing is still this leg's side), never a hand.
+fn outer_point_at(mesh: &TriMesh, y: f64, near: DVec3, z: f64, sign: f64) -> Option<DVec3> {
+    let level = Plane { normal: DVec3::Y, offset: y };
+    let leg = slice(mesh, &level).into_iter().map(|s| s.polyline).filter(|p| p.closed).min_by(|a, b| {
+        let d = |p: &Polyline| p.closest(near).map_or(f64::INFINITY, |c| c.point.distance(near));
+        d(a).total_cmp(&d(b))
+    })?;
+    extreme(&plane_crossings(&leg, &Plane { normal: DVec3::Z, offset: z }), |p| sign * p.x)
 }
 
 /// On the coronal section `z = arm_z`, starts at the torso's side at

@@ -125,6 +125,7 @@ fn feature_slug(e: &FeatureError) -> &'static str {
         FeatureError::DegenerateFrame { .. } => "body-degenerate-frame",
         FeatureError::OffMidline { .. } => "body-landmark-off-midline",
         FeatureError::ImplausibleGirth { .. } => "body-implausible-girth",
+        FeatureError::LandmarkHeight { .. } => "body-landmark-height",
     }
 }
 

@@ -34,8 +34,9 @@
 //! profiled edges to both its ends closes the ring ([`ring_loop`]: the
 //! trouser thigh ring runs through the crotch node). The offset `r` is the
 //! one that gives at least the declared ease on the tape of the ring *as
-//! its profiles sample it*, that node included ([`sampled_radial`]), and
-//! the girth itself the declared ease ([`ring_radial`]). A hung
+//! its profiles sample it*, that node included ([`sampled_radial`]; the
+//! arcs to it as decoding carries them, Eq. (5) copies onto the eased
+//! nodes), and the girth itself the declared ease ([`ring_radial`]). A hung
 //! node keeps its hang and its arcs Eq. (5)'s copy, and the report states
 //! the ease the hang gives ([`expected_ease`]).
 //!
@@ -247,22 +248,31 @@ pub fn eased_arc(
 /// The arcs of a ring on `loop_` eased by `radial` within `plane`: arc `k`
 /// runs the shorter way round the loop from `params[k]` to `params[k + 1]`
 /// (cyclically), sampled at `counts[k]` points, its ends bent onto
-/// `ends[k]` and `ends[k + 1]` where given ([`eased_arc`]).
+/// `ends[k]` and `ends[k + 1]` where given ([`eased_arc`]). Where
+/// `copies[k]` is given (an arc to a node off the girth, which decoding
+/// carries by Eq. (5)), arc `k` is that profile relocated onto its two
+/// ends instead ([`Profile::relocated`]: the ends on the loop at `radial`,
+/// or `ends`), as decoding builds it.
 pub fn ring_arcs(
     loop_: &Polyline,
     plane: &Plane,
     params: &[f64],
     ends: &[Option<DVec3>],
     counts: &[usize],
+    copies: &[Option<Profile>],
     radial: f64,
 ) -> Vec<Vec<DVec3>> {
     let total = loop_.length();
     let m = params.len();
     let end = |k: usize| ends.get(k).copied().flatten();
+    let at = |k: usize| end(k).unwrap_or_else(|| eased(loop_, params[k], radial, plane));
     (0..m)
         .map(|k| {
             let j = (k + 1) % m;
             let n = counts.get(k).copied().unwrap_or(2);
+            if let Some(Ok(copy)) = copies.get(k).and_then(|c| c.as_ref()).map(|c| c.relocated(at(k), at(j))) {
+                return copy.points().to_vec();
+            }
             eased_arc(loop_, plane, params[k], shorter_way(params[k], params[j], total), n, radial, (end(k), end(j)))
         })
         .collect()
@@ -274,14 +284,15 @@ const RADIAL_BISECTIONS: usize = 40;
 
 /// The outward offset `r` whose ring, *as its profiles sample it*, adds
 /// exactly `ease` (m) to the bridged girth's tape: the ring of
-/// [`ring_arcs`]`(loop_, plane, params, ends, counts, r)`, its tape taken
+/// [`ring_arcs`]`(loop_, plane, params, ends, counts, copies, r)`, its tape taken
 /// over all its points. The garment is the polygon through those samples,
 /// not the smooth eased loop, whose hull is longer: with 7 points per arc
 /// the ring fell 1–5 mm short of the declared ease ([`ring_radial`] on the
 /// whole loop; a chest over the shoulder blades lost 5.4 mm of 60). A node
 /// off the girth (`ends`: a crotch node between the thighs) may already add
 /// more than `ease`: then `r = 0`, and the ring's ease is what the node
-/// gives ([`expected_ease`]). Bisection on `r`, the tape being
+/// gives ([`expected_ease`]). `copies` as in [`ring_arcs`]: the arcs to
+/// that node as decoding carries them. Bisection on `r`, the tape being
 /// non-decreasing in `r`.
 pub fn sampled_radial(
     loop_: &Polyline,
@@ -290,10 +301,11 @@ pub fn sampled_radial(
     params: &[f64],
     ends: &[Option<DVec3>],
     counts: &[usize],
+    copies: &[Option<Profile>],
 ) -> f64 {
     let base = tape_length(&[loop_], plane);
     let gain = |r: f64| {
-        let pts: Vec<DVec3> = ring_arcs(loop_, plane, params, ends, counts, r).concat();
+        let pts: Vec<DVec3> = ring_arcs(loop_, plane, params, ends, counts, copies, r).concat();
         tape_length(&[&Polyline::new(pts, true)], plane) - base
     };
     if ease.is_nan() || ease <= 0.0 || gain(0.0) >= ease {
@@ -384,6 +396,27 @@ impl RingOrder {
     fn counts(&self, t: &Template) -> Vec<usize> {
         self.edges.iter().map(|&e| t.edges[e as usize].profile.len()).collect()
     }
+
+    /// Per arc, the template's profile oriented along the ring where the
+    /// arc runs to or from the node off the girth (decoding carries those
+    /// by Eq. (5), [`refit_rings`]), else `None`.
+    fn copies(&self, t: &Template) -> Vec<Option<Profile>> {
+        let m = self.order.len();
+        (0..m)
+            .map(|k| {
+                let (a, b) = (self.order[k].0, self.order[(k + 1) % m].0);
+                if self.through.is_none() || (Some(a) != self.through && Some(b) != self.through) {
+                    return None;
+                }
+                let e = &t.edges[self.edges[k] as usize];
+                let mut pts: Vec<DVec3> = e.profile.iter().map(|&p| DVec3::from_array(p)).collect();
+                if e.start != a {
+                    pts.reverse();
+                }
+                Profile::new(pts).ok()
+            })
+            .collect()
+    }
 }
 
 /// The ring of `curve` ([`ring_loop`], no node hung) in the template's
@@ -437,8 +470,16 @@ fn eased_girths(t: &Template, body: &FeatureBody, positions: &[DVec3]) -> Vec<Ea
             let ring = ring_order(t, body, positions, curve, &loop_);
             let radial = match &ring {
                 None => ring_radial(&loop_, &plane, ease * 1e-3),
-                Some(o) => sampled_radial(&loop_, &plane, ease * 1e-3, &o.params(), &o.ends(positions), &o.counts(t))
-                    .max(ring_radial(&loop_, &plane, ease * 1e-3)),
+                Some(o) => sampled_radial(
+                    &loop_,
+                    &plane,
+                    ease * 1e-3,
+                    &o.params(),
+                    &o.ends(positions),
+                    &o.counts(t),
+                    &o.copies(t),
+                )
+                .max(ring_radial(&loop_, &plane, ease * 1e-3)),
             };
             out.push(EasedGirth { curve, loop_, plane, radial });
         }
@@ -489,7 +530,8 @@ pub fn place_ring_nodes(t: &Template, body: &FeatureBody, positions: &mut [DVec3
 /// edge and oriented from the edge's start node. Each arc between two ring
 /// nodes runs along the eased girth, its ends on the decoded nodes. The
 /// arcs to a node the ring closes through ([`RingLoop::through`]) and to a
-/// hung node keep Eq. (5)'s copy: bending them along the new body's girth
+/// hung node keep Eq. (5)'s copy (the solved offset counts them as such,
+/// [`sampled_radial`]): bending them along the new body's girth
 /// onto the crotch node put 2–4 of 120 trouser pieces over the 3 % strain
 /// bar (a kink where the arc turns up to the crotch), and bending them onto
 /// hung knee nodes left crotch triangles through the body on three heavy
@@ -562,10 +604,14 @@ pub fn ring_tape(
 /// The ease each declared girth should have on `body` (mm, by `ease_mm`
 /// name; the left leg for leg girths): the declared ease, or, where the
 /// template's shape rules add ease on purpose, the larger ease of the ring
-/// as decoded (`m`, before any clearing): a hang moved a node of the ring
+/// as decoded and cleared of the body (`m` after
+/// [`crate::refine::clear::clear_coarse`]: a profile point that decoding
+/// left inside the body is moved out, and the ring is that much longer on
+/// purpose): a hang moved a node of the ring
 /// (a skirt falling straight from the waist past the hip), or the ring
 /// closes through a node off its girth that alone adds more than declared
-/// (a crotch node far from the thighs).
+/// (a crotch node far from the thighs; Eq. (5)'s arcs to it cut into a
+/// full inner thigh and are moved out: 7–9 mm more on pop05 and pop29).
 pub fn expected_ease(t: &Template, body: &FeatureBody, m: &CoarseMesh) -> std::collections::BTreeMap<String, f64> {
     let mut out = std::collections::BTreeMap::new();
     for (name, &declared) in &t.ease_mm {

@@ -206,7 +206,7 @@ impl<'a> Builder<'a> {
             .map(|k| through.and_then(|(at, node)| (k == at).then(|| self.draft.positions[node as usize])))
             .collect();
         let counts = vec![self.profile_points; points.len()];
-        let radial = girth::sampled_radial(&loop_, &plane, ease_mm * MM, &params, &ends, &counts)
+        let radial = girth::sampled_radial(&loop_, &plane, ease_mm * MM, &params, &ends, &counts, &[])
             .max(girth::ring_radial(&loop_, &plane, ease_mm * MM));
         let nodes: Vec<u32> = params
             .iter()
@@ -217,7 +217,7 @@ impl<'a> Builder<'a> {
                 _ => self.node(girth::eased(&loop_, t, radial, &plane), Some(tie)),
             })
             .collect();
-        let arcs = girth::ring_arcs(&loop_, &plane, &params, &ends, &counts, radial);
+        let arcs = girth::ring_arcs(&loop_, &plane, &params, &ends, &counts, &[], radial);
         let ring = Ring { nodes, curve: loop_, params, radial, plane };
         for (i, pts) in arcs.into_iter().enumerate() {
             let j = (i + 1) % ring.nodes.len();
