@@ -24,7 +24,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::body::feature::FeatureBody;
 use crate::collide::cache::Obstacle;
-use crate::pattern::garment::{pattern, GarmentPattern, PatternError, PatternOptions};
+use crate::pattern::garment::{pattern_with_plan, DartPlan, GarmentPattern, PatternError, PatternOptions};
 use crate::refine::clear::{clear_coarse, clear_surface, ClearError, ClearOptions};
 use crate::refine::collision::{Collider, CollisionOptions, CollisionReport};
 use crate::refine::subdivide::{refine, relax_tangentially, LevelReport, RefineError, RefineMesh, RefineOptions};
@@ -164,7 +164,8 @@ fn ms(since: Instant) -> f64 {
     since.elapsed().as_secs_f64() * 1e3
 }
 
-/// Grades `t` onto `body` (module docs); `size` names the result.
+/// Grades `t` onto `body` (module docs); `size` names the result. The
+/// pattern's darts are decided on this body ([`crate::pattern::garment::pattern`]).
 ///
 /// # Errors
 /// [`PipelineError`].
@@ -174,6 +175,24 @@ pub fn grade(
     obstacle: Option<&Obstacle>,
     size: &str,
     opts: &GradeOptions,
+) -> Result<Graded, PipelineError> {
+    grade_with_plan(t, body, obstacle, size, opts, None)
+}
+
+/// [`grade`], the pattern's darts those of `plan` where given: a size of a
+/// run whose base size decided them (issue #14: one dart plan per grade
+/// run, [`pattern_with_plan`]); the base size's plan is
+/// `Graded::pattern.dart_plan`.
+///
+/// # Errors
+/// [`PipelineError`].
+pub fn grade_with_plan(
+    t: &Template,
+    body: &FeatureBody,
+    obstacle: Option<&Obstacle>,
+    size: &str,
+    opts: &GradeOptions,
+    plan: Option<&DartPlan>,
 ) -> Result<Graded, PipelineError> {
     let levels = opts.levels.unwrap_or(t.defaults.levels as usize);
     let clearance_mm = opts.clearance_mm.unwrap_or(t.defaults.clearance_mm);
@@ -224,7 +243,7 @@ pub fn grade(
 
     let start = Instant::now();
     let cut_from = unlifted.as_deref().unwrap_or(&mesh.positions);
-    let pattern = pattern(t, cut_from, &mesh.triangles, levels, size, &pattern_opts)?;
+    let pattern = pattern_with_plan(t, cut_from, &mesh.triangles, levels, size, &pattern_opts, plan)?;
     let pattern_ms = ms(start);
     let girth_lines = girth_lines(t, body, &decoded, &hung, &mesh);
     let cut_positions = cut_from.to_vec();

@@ -1,6 +1,8 @@
 //! Sewing patterns on real bodies (issue #5): every library template on every
 //! fixture body and ASTM size mannequin, graded end to end (decode, 3 levels
-//! with collision, flattening, pieces); the bars on seam mismatch, outline
+//! with collision, flattening, pieces); the 12 ASTM sizes as one grade run,
+//! the darts decided on the base size (8) and carried to the others (issue
+//! #14: one dart plan per run); the bars on seam mismatch, outline
 //! self-intersection, flips, strain and area accuracy; exports (SVG, DXF,
 //! graded nests, grade rules) written to `target/pattern-exports` for
 //! `tests/ezdxf_check.py` (run by `.ci/run`) and read back here.
@@ -13,13 +15,26 @@ use grade3d::collide::cache::Obstacle;
 use grade3d::collide::render::{GpuContext, RenderOptions};
 use grade3d::geom::winding::{penetration_stats, WindingOptions, WindingTree};
 use grade3d::pattern::export::{dxf, rul, svg};
-use grade3d::pattern::grade::{grade_rules, nests};
+use grade3d::pattern::garment::DartPlan;
+use grade3d::body::measure::girth_of;
+use grade3d::body::vocab::CurveId;
+use grade3d::pattern::grade::{grade_rules, nest_steps, nests, step_regularity};
 use grade3d::pattern::piece::PatternPiece;
-use grade3d::pipeline::{grade, GradeOptions};
+use grade3d::pipeline::{grade_with_plan, GradeOptions};
 use grade3d::template::library::builtin;
 
 mod common;
 use common::fixture_bodies;
+
+/// The ASTM run's base size (its dart plan is carried to the other sizes;
+/// the grade rules are based on it).
+const BASE: &str = "astm/size-8";
+
+/// Issue #14's strain bar for skirt and trouser pieces with the run's one
+/// dart plan (at most two found darts per piece): p95 edge strain. Issue #5
+/// asked 3 % with the search free on every size (fans of 3–5 darts on a
+/// trouser back, different per size and side).
+const STRAIN_P95: f64 = 0.04;
 
 fn export_dir() -> PathBuf {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/pattern-exports");
@@ -62,14 +77,43 @@ fn patterns_on_every_body_meet_the_bars() {
     let mut timing = [0.0f64; 3];
     // deepest vertex (mm), vertices inside, triangle pairs before clearing, clearing ms, largest lift (mm)
     let mut outside = (0.0f64, 0usize, 0usize, 0.0f64, 0.0f64);
-    for (name, mesh, lm) in fixture_bodies() {
+    // the ASTM run's base size before its other sizes: its dart plan is carried to them
+    let mut bodies = fixture_bodies();
+    bodies.sort_by_key(|(name, _, _)| (name.starts_with("astm/"), name != BASE));
+    let mut plans: BTreeMap<String, DartPlan> = BTreeMap::new();
+    // the ASTM bodies' hip and bust girths, mm (the governing girths of the grade steps)
+    let mut chart: BTreeMap<&str, BTreeMap<String, f64>> = BTreeMap::new();
+    let mut found_darts: BTreeMap<String, usize> = BTreeMap::new();
+    for (name, mesh, lm) in bodies {
         let body = derive_features(mesh, &lm, &DeriveOptions::default()).unwrap();
+        for (girth, curve) in [("hip", CurveId::Hip), ("bust", CurveId::Bust)] {
+            let c = &body.curves[&curve];
+            chart.entry(girth).or_default().insert(name.clone(), girth_of(&c.polyline, c.plane.as_ref()) * 1e3);
+        }
         let maps = gpu.render(&body.mesh, &RenderOptions::default()).unwrap();
         let obstacle = Obstacle { maps, tree: WindingTree::new(&body.mesh, &WindingOptions::default()) };
         let size = name.rsplit('/').next().unwrap().to_string();
         for t in &library {
-            let g = grade(t, &body, Some(&obstacle), &size, &GradeOptions::default())
+            let plan = plans.get(&t.name).filter(|_| name.starts_with("astm/"));
+            let g = grade_with_plan(t, &body, Some(&obstacle), &size, &GradeOptions::default(), plan)
                 .unwrap_or_else(|e| panic!("{} on {name}: {e}", t.name));
+            if name == BASE {
+                plans.insert(t.name.clone(), g.pattern.dart_plan.clone());
+            }
+            if name.starts_with("astm/") {
+                // one plan for the whole run: the base size's darts on every size
+                assert_eq!(&g.pattern.dart_plan, &plans[&t.name], "{} on {name}: the run's dart plan", t.name);
+            }
+            for r in &g.pattern.reports {
+                assert!(
+                    r.found_darts.len() <= 2,
+                    "{} {} on {name}: {} found darts",
+                    t.name,
+                    r.name,
+                    r.found_darts.len()
+                );
+                *found_darts.entry(t.name.clone()).or_default() += r.found_darts.len();
+            }
             // the pipeline's garment stays outside the body: every vertex, fixed ones
             // included, by the exact test, and no triangle through a body triangle
             let pen = penetration_stats(&obstacle.tree, &g.mesh.positions);
@@ -114,7 +158,7 @@ fn patterns_on_every_body_meet_the_bars() {
                 }
                 if t.name != "fitted-bodice" {
                     skirt_trouser_pieces += 1;
-                    if d.strain_p95 > 0.03 {
+                    if d.strain_p95 > STRAIN_P95 {
                         strain_misses.push(format!("{}: p95 strain {:.4}", at(&r.name), d.strain_p95));
                     }
                     if d.area_accuracy.abs() > 0.02 {
@@ -179,6 +223,36 @@ fn patterns_on_every_body_meet_the_bars() {
             eprintln!("{style} {name}: width {w0:.1} mm ({}) → {w1:.1} mm ({})", all[0].size, all[11].size);
             assert!(w1 > w0, "{style} {name}: {} not wider than {}", all[11].size, all[0].size);
         }
+        // how the grade reads as a grade (issue #14, items 3 and 4; measured, not yet met)
+        let steps = nest_steps(&nest);
+        let mut per_piece: BTreeMap<&str, (usize, usize)> = BTreeMap::new();
+        for st in &steps {
+            let e = per_piece.entry(st.piece.as_str()).or_default();
+            e.0 += st.crossings;
+            e.1 += st.outside;
+        }
+        let nested = steps.iter().filter(|st| st.crossings == 0 && st.outside == 0).count();
+        eprintln!(
+            "{style} nest: per piece (crossings, points outside the next size) over 11 steps {per_piece:?}; \
+             {nested} of {} steps nest",
+            steps.len()
+        );
+        let governing = if style == "fitted-bodice" { "bust" } else { "hip" };
+        let girths: Vec<f64> = sizes.iter().map(|(s, _)| chart[governing][&format!("astm/{s}")]).collect();
+        let chart_steps: Vec<f64> = girths.windows(2).map(|w| w[1] - w[0]).collect();
+        let reg = step_regularity(&rules, Some(&chart_steps));
+        let over = reg.iter().filter(|r| r.worst_mm > r.allowed_mm).count();
+        let signs: usize = reg.iter().map(|r| r.sign_changes).sum();
+        let worst = reg.iter().max_by(|a, b| (a.worst_mm - a.allowed_mm).total_cmp(&(b.worst_mm - b.allowed_mm)));
+        eprintln!(
+            "{style} grade steps (scaled by the {governing} steps): {over} of {} grade points vary more than \
+             max(2 mm, 25 %), {signs} sign changes; worst {}",
+            reg.len(),
+            worst.map_or(String::new(), |r| format!(
+                "{} {}: {:.1} mm (allowed {:.1})",
+                r.piece, r.label, r.worst_mm, r.allowed_mm
+            ))
+        );
         std::fs::write(dir.join(format!("{style}-rules.csv")), rul::rules_table_csv(&rules)).unwrap();
         std::fs::write(dir.join(format!("{style}.rul")), rul::rules_rul(&rules)).unwrap();
     }
@@ -206,7 +280,7 @@ fn patterns_on_every_body_meet_the_bars() {
     }
     for t in ["straight-skirt", "trousers"] {
         let mine: Vec<&String> = strain_misses.iter().filter(|m| m.starts_with(t)).collect();
-        eprintln!("{t}: {} pieces above p95 3 %: {mine:?}", mine.len());
+        eprintln!("{t}: {} pieces above p95 4 %: {mine:?}", mine.len());
     }
     check_with_ezdxf(&dir);
     eprintln!(
@@ -215,12 +289,14 @@ fn patterns_on_every_body_meet_the_bars() {
         darts_declared - darts_left_out.len()
     );
     eprintln!(
-        "skirt/trouser pieces above the strain bar (p95 ≤ 3 %): {} of {}; above the area bar (|E_s| ≤ 2 %): {:?}",
+        "found darts per template over all grades: {found_darts:?}; skirt/trouser pieces above the strain bar \
+         (p95 ≤ 4 %): {} of {}; above the area bar (|E_s| ≤ 2 %): {:?}",
         strain_misses.len(),
         skirt_trouser_pieces,
         misses
     );
-    // issue #5's distortion bar: skirt and trouser pieces p95 strain ≤ 3 %, |E_s| ≤ 2 %
+    // issue #14's distortion bar, with the run's one dart plan: skirt and trouser pieces
+    // p95 strain ≤ 4 %, |E_s| ≤ 2 %
     assert!(strain_misses.is_empty() && misses.is_empty(), "{strain_misses:#?}\n{misses:#?}");
     eprintln!(
         "outside the body, every vertex: deepest {:.3} mm, {} inside; garment/body triangle pairs crossing before \

@@ -58,7 +58,9 @@ pub struct AutoDartOptions {
     /// A piece whose 95th-percentile edge strain is at or below this gets no
     /// dart, and the search stops once a piece reaches it (fraction). Default 0.025.
     pub target_strain_p95: f64,
-    /// Most darts added to one piece (count). Default 8.
+    /// Most darts added to one piece (count). Default 2 (issue #14: a
+    /// pattern maker drafts one or two back darts per side, not a fan; the
+    /// search with 8 put 3–5 on a trouser back, intakes up to 77 mm).
     pub max_darts: usize,
     /// Apexes tried per dart (count; each costs one flattening). Default 24.
     pub candidates: usize,
@@ -77,7 +79,7 @@ impl Default for AutoDartOptions {
         Self {
             enabled: true,
             target_strain_p95: 0.025,
-            max_darts: 8,
+            max_darts: 2,
             candidates: 24,
             min_gain: 0.0005,
             min_length_mm: 20.0,

@@ -84,6 +84,12 @@ pub struct PatternOptions {
     /// to this power (module docs; 0: the plain mean of both sides).
     /// Default 2.
     pub negotiation_power: f64,
+    /// In a grade run (a size chart, several bodies), decide the darts on
+    /// every size afresh rather than once on the base size and carry that
+    /// plan to the others ([`DartPlan`]). Default false (issue #14: one
+    /// dart plan per grade run; per-size darts differ from size to size,
+    /// and a graded nest of them does not stack).
+    pub search_every_size: bool,
 }
 
 impl Default for PatternOptions {
@@ -95,6 +101,7 @@ impl Default for PatternOptions {
             auto_darts: AutoDartOptions::default(),
             negotiate_seams: true,
             negotiation_power: 2.0,
+            search_every_size: false,
         }
     }
 }
@@ -116,6 +123,43 @@ pub enum PatternError {
     /// Assembling a piece failed.
     #[error(transparent)]
     Piece(#[from] PieceError),
+    /// A dart of the run's plan ([`DartPlan`]) could not be slit into this
+    /// size's panel (the plan comes from another refinement of the template).
+    #[error("dart '{dart}' of the run's dart plan does not fit panel '{panel}': {reason}")]
+    CarriedDart {
+        /// Panel name.
+        panel: String,
+        /// Dart name.
+        dart: String,
+        /// Why.
+        reason: String,
+    },
+}
+
+/// The darts of a grade run, decided once on its base size and carried to
+/// every other size (issue #14, item 1): which declared darts are left out,
+/// and the darts found where the base size strained, as chains of the
+/// refined mesh's vertex ids. Every size of a template is refined with the
+/// same connectivity, so a chain of ids is the same template-relative line
+/// on every size: same count, mouths and apexes at the same places.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct DartPlan {
+    /// Declared darts left out, with their opening on the base size, mm
+    /// (negative: inverted) — as [`GarmentPattern::darts_left_out`].
+    pub left_out: Vec<(String, f64)>,
+    /// Darts found on the base size.
+    pub found: Vec<PlannedDart>,
+}
+
+/// A found dart of a [`DartPlan`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PlannedDart {
+    /// The panel it is slit into.
+    pub panel: String,
+    /// Its name (`dart_auto_<panel>_<k>`).
+    pub name: String,
+    /// Its line, refined-mesh vertex ids from the mouth on the outline to the apex.
+    pub chain: Vec<u32>,
 }
 
 /// Where the strain of a piece concentrates.
@@ -175,10 +219,15 @@ pub struct GarmentPattern {
     /// Declared darts left out on this body (no intake, or inverted), with their
     /// opening when they were tried, mm (negative: inverted).
     pub darts_left_out: Vec<(String, f64)>,
+    /// The dart plan this pattern was made with: found here (a base size,
+    /// a single grade), or carried from the run's base size.
+    #[serde(default)]
+    pub dart_plan: DartPlan,
 }
 
 /// The pattern of the fine mesh (`positions` in metres, `triangles`) that
-/// `levels` levels of subdivision made of template `t` (module docs).
+/// `levels` levels of subdivision made of template `t` (module docs), its
+/// darts decided here ([`pattern_with_plan`] without a plan).
 ///
 /// # Errors
 /// [`PatternError`].
@@ -190,10 +239,40 @@ pub fn pattern(
     size: &str,
     opts: &PatternOptions,
 ) -> Result<GarmentPattern, PatternError> {
+    pattern_with_plan(t, positions, triangles, levels, size, opts, None)
+}
+
+/// [`pattern`] with the darts of `plan` when given (a size of a run whose
+/// base size decided them: the declared darts it leaves out are left out,
+/// its found darts are slit along the same vertex chains, and nothing is
+/// searched), else decided on this mesh: every declared dart that opens is
+/// kept, and, with [`AutoDartOptions::enabled`], darts are searched where a
+/// piece still strains. The result's [`GarmentPattern::dart_plan`] is the
+/// plan used.
+///
+/// # Errors
+/// [`PatternError`]; [`PatternError::CarriedDart`] when a planned chain is
+/// not a line of this mesh's panel.
+pub fn pattern_with_plan(
+    t: &Template,
+    positions: &[DVec3],
+    triangles: &[[u32; 3]],
+    levels: usize,
+    size: &str,
+    opts: &PatternOptions,
+    plan: Option<&DartPlan>,
+) -> Result<GarmentPattern, PatternError> {
     let mut tt = t.clone();
+    if let Some(plan) = plan {
+        tt.darts.retain(|d| !plan.left_out.iter().any(|(name, _)| *name == d.name));
+        let (mut g, _) = pattern_once(&tt, positions, triangles, levels, size, opts, Search::Carry(&plan.found))?;
+        g.darts_left_out = plan.left_out.clone();
+        g.dart_plan.left_out = plan.left_out.clone();
+        return Ok(g);
+    }
     let mut left_out = Vec::new();
     loop {
-        let (mut g, darts) = pattern_once(&tt, positions, triangles, levels, size, opts, false)?;
+        let (mut g, darts) = pattern_once(&tt, positions, triangles, levels, size, opts, Search::None)?;
         // the worst dart that does not open (or opens inverted) goes, and the pattern is made again
         let worst = darts
             .into_iter()
@@ -208,13 +287,54 @@ pub fn pattern(
                 // the declared darts are settled: darts where a piece still strains
                 let target = opts.auto_darts.target_strain_p95;
                 if opts.auto_darts.enabled && g.reports.iter().any(|r| r.distortion.strain_p95 > target) {
-                    g = pattern_once(&tt, positions, triangles, levels, size, opts, true)?.0;
+                    g = pattern_once(&tt, positions, triangles, levels, size, opts, Search::Find)?.0;
                 }
+                g.dart_plan.left_out = left_out.clone();
                 g.darts_left_out = left_out;
                 return Ok(g);
             }
         }
     }
+}
+
+/// Where [`pattern_once`]'s extra darts come from.
+#[derive(Clone, Copy)]
+enum Search<'a> {
+    /// None: the declared darts only.
+    None,
+    /// Searched where a piece strains ([`search_darts`]).
+    Find,
+    /// Carried from a plan.
+    Carry(&'a [PlannedDart]),
+}
+
+/// Slits the planned darts of `panel` (global vertex chains mapped to its local ids).
+fn carry_darts(panel: &mut Panel, planned: &[PlannedDart]) -> Result<Vec<FoundDart>, PatternError> {
+    let mut local: std::collections::HashMap<u32, u32> = std::collections::HashMap::with_capacity(panel.global.len());
+    for (l, &g) in panel.global.iter().enumerate() {
+        local.entry(g).or_insert(l as u32);
+    }
+    let mut found = Vec::new();
+    let name = panel.name.clone();
+    for d in planned.iter().filter(|d| d.panel == name) {
+        let err = |reason: String| PatternError::CarriedDart { panel: name.clone(), dart: d.name.clone(), reason };
+        let chain: Vec<u32> = d
+            .chain
+            .iter()
+            .map(|g| local.get(g).copied().ok_or_else(|| err(format!("vertex {g} is not in the panel"))))
+            .collect::<Result<_, _>>()?;
+        panel.add_dart(&d.name, &chain).map_err(err)?;
+        let pts: Vec<DVec3> = chain.iter().map(|&l| panel.positions[l as usize]).collect();
+        found.push(FoundDart {
+            name: d.name.clone(),
+            length_mm: polyline_length_3d(&pts) * 1e3,
+            intake_mm: 0.0,
+            strain_p95_before: 0.0,
+            strain_p95_after: 0.0,
+            apex: pts.last().copied().unwrap_or_default(),
+        });
+    }
+    Ok(found)
 }
 
 /// A dart's name, signed opening (mm, negative when inverted) and whether its
@@ -358,8 +478,9 @@ fn pattern_once(
     levels: usize,
     size: &str,
     opts: &PatternOptions,
-    find_darts: bool,
+    search: Search<'_>,
 ) -> Result<(GarmentPattern, Vec<DartCheck>), PatternError> {
+    let find_darts = matches!(search, Search::Find);
     let (cut_panels, seams, lineage) = cut(t, positions, triangles, levels)?;
     let n_nodes = t.nodes.len() as u32;
     // darts where a piece strains, searched with the seams free when they are negotiated afterwards;
@@ -388,6 +509,11 @@ fn pattern_once(
                 (*panel, found_darts[i], free[i]) = (found.panel, found.darts, Some(found.last));
             }
         }
+        if let Search::Carry(planned) = search {
+            for (i, panel) in panels.iter_mut().enumerate() {
+                found_darts[i] = carry_darts(panel, planned)?;
+            }
+        }
         let sewn = if opts.negotiate_seams {
             let free = if find_darts {
                 free.into_iter().flatten().collect()
@@ -409,7 +535,10 @@ fn pattern_once(
             let p = assemble(t, panel, &seams, &lineage, &flat.uv, size, &opts.piece)?;
             let sew_line_self_intersects = self_intersects(&p.piece.sew_line);
             let cut_line_self_intersects = self_intersects(&p.piece.cut_line);
-            if !found_darts.is_empty() && (d.flipped > 0 || sew_line_self_intersects || cut_line_self_intersects) {
+            if find_darts
+                && !found_darts.is_empty()
+                && (d.flipped > 0 || sew_line_self_intersects || cut_line_self_intersects)
+            {
                 cap[i] = found_darts.len() - 1;
                 refused = true;
             }
@@ -440,7 +569,34 @@ fn pattern_once(
             placed.push(p);
         }
         if !refused {
-            return Ok(finish(t, positions, size, panels, &seams, pieces, placed, reports));
+            // the found (or carried) darts as lines of the refined mesh: the run's plan
+            let found: Vec<PlannedDart> = panels
+                .iter()
+                .zip(&reports)
+                .flat_map(|(panel, r)| {
+                    r.found_darts.iter().filter_map(|f| {
+                        let legs = panel.darts.iter().find(|d| d.name == f.name)?;
+                        Some(PlannedDart {
+                            panel: panel.name.clone(),
+                            name: f.name.clone(),
+                            chain: legs.a.iter().map(|&l| panel.global[l as usize]).collect(),
+                        })
+                    })
+                })
+                .collect();
+            let (mut g, checks) = finish(t, positions, size, panels, &seams, pieces, placed, reports);
+            g.dart_plan.found = found;
+            if let Search::Carry(_) = search {
+                // a carried dart opens by what this size's flattening gives it; nothing was searched
+                for r in &mut g.reports {
+                    let p95 = r.distortion.strain_p95;
+                    for f in &mut r.found_darts {
+                        f.intake_mm = checks.iter().find(|c| c.0 == f.name).map_or(0.0, |c| c.1);
+                        (f.strain_p95_before, f.strain_p95_after) = (p95, p95);
+                    }
+                }
+            }
+            return Ok((g, checks));
         }
     }
 }
@@ -562,6 +718,7 @@ fn finish(
         reports,
         seams: seam_reports,
         darts_left_out: Vec::new(),
+        dart_plan: DartPlan::default(),
     };
     (g, darts)
 }
@@ -696,5 +853,41 @@ mod tests {
             assert_eq!(r.distortion.flipped, 0, "{}", r.name);
             assert!(!r.sew_line_self_intersects, "{}", r.name);
         }
+    }
+
+    #[test]
+    fn a_plan_carried_onto_its_own_mesh_gives_the_same_pattern() {
+        // planted answer: the trousers on the reference body, darts searched; the plan it
+        // returns, carried onto the same mesh, slits the same lines and gives the same pieces
+        let t = builtin().expect("library").into_iter().find(|t| t.name == "trousers").expect("trousers");
+        let body = reference_body().expect("reference body");
+        let m0 = decode(&t, &body, Relocation::Eq1Frame).expect("decode");
+        let edges: Vec<(u32, u32)> = t.edges.iter().map(|e| (e.start, e.end)).collect();
+        let coarse = RefineMesh::from_coarse(&m0, &edges).expect("coarse");
+        let (fine, _) = refine(coarse, &RefineOptions::default(), |_, _| {}).expect("refine");
+        let opts = PatternOptions {
+            auto_darts: AutoDartOptions { target_strain_p95: 0.0, threads: 1, ..Default::default() },
+            ..Default::default()
+        };
+        let found = pattern(&t, &fine.positions, &fine.triangles, 3, "ref", &opts).expect("pattern");
+        let plan = found.dart_plan.clone();
+        assert!(!plan.found.is_empty(), "a zero target finds darts");
+        for r in &found.reports {
+            assert!(r.found_darts.len() <= 2, "{}: at most two found darts per piece by default", r.name);
+        }
+        let carried =
+            pattern_with_plan(&t, &fine.positions, &fine.triangles, 3, "ref", &opts, Some(&plan)).expect("carried");
+        assert_eq!(carried.dart_plan, plan);
+        for (a, b) in found.pieces.iter().zip(&carried.pieces) {
+            assert_eq!(a.name, b.name);
+            assert_eq!(a.sew_line.len(), b.sew_line.len(), "{}", a.name);
+            let off = a.sew_line.iter().zip(&b.sew_line).map(|(p, q)| p.distance(*q)).fold(0.0, f64::max);
+            assert!(off < 1e-6, "{}: sew lines differ by {off} mm", a.name);
+        }
+        // a chain that is not a line of the panel is a typed error, not a panic
+        let mut bad = plan.clone();
+        bad.found[0].chain = vec![u32::MAX, 0];
+        let e = pattern_with_plan(&t, &fine.positions, &fine.triangles, 3, "ref", &opts, Some(&bad)).unwrap_err();
+        assert!(matches!(e, PatternError::CarriedDart { .. }), "{e}");
     }
 }

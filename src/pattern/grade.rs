@@ -119,6 +119,157 @@ pub fn grade_rules(
     })
 }
 
+/// How one step of a graded nest reads (issue #14, item 3): the sew lines
+/// of two consecutive sizes of a piece, overlaid as the nest stacks them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NestStep {
+    /// Piece name.
+    pub piece: String,
+    /// The smaller size (earlier in size order).
+    pub smaller: String,
+    /// The next size.
+    pub larger: String,
+    /// Segment pairs of the two sew lines that properly cross (touching at
+    /// a shared point — the stack point, a grain end — is not a crossing).
+    pub crossings: usize,
+    /// Sew-line points of the smaller size outside the larger one's, farther
+    /// than [`NEST_TOUCH_MM`] from it.
+    pub outside: usize,
+}
+
+/// Two sew lines closer than this touch (a shared stack point or grain
+/// end), mm.
+pub const NEST_TOUCH_MM: f64 = 0.01;
+
+/// Every consecutive step of every piece of `nest` ([`nests`]) as a
+/// [`NestStep`]. Where the chart grows, each size's sew line should lie
+/// inside the next one's: 0 crossings, 0 points outside.
+pub fn nest_steps(nest: &[(String, Vec<PatternPiece>)]) -> Vec<NestStep> {
+    let mut out = Vec::new();
+    for (piece, all) in nest {
+        for w in all.windows(2) {
+            let (a, b) = (&w[0].sew_line, &w[1].sew_line);
+            let mut crossings = 0;
+            for i in 0..a.len() {
+                let (p, q) = (a[i], a[(i + 1) % a.len()]);
+                for j in 0..b.len() {
+                    if properly_cross(p, q, b[j], b[(j + 1) % b.len()]) {
+                        crossings += 1;
+                    }
+                }
+            }
+            let outside = a
+                .iter()
+                .filter(|&&p| winding(b, p) == 0 && distance_to_polygon(b, p) > NEST_TOUCH_MM)
+                .count();
+            out.push(NestStep {
+                piece: piece.clone(),
+                smaller: w[0].size.clone(),
+                larger: w[1].size.clone(),
+                crossings,
+                outside,
+            });
+        }
+    }
+    out
+}
+
+/// Whether segments `pq` and `rs` cross at a point interior to both
+/// (strict orientation signs: touching or collinear overlap is not a crossing).
+fn properly_cross(p: DVec2, q: DVec2, r: DVec2, s: DVec2) -> bool {
+    let o = |a: DVec2, b: DVec2, c: DVec2| (b - a).perp_dot(c - a);
+    let (d1, d2, d3, d4) = (o(r, s, p), o(r, s, q), o(p, q, r), o(p, q, s));
+    d1 * d2 < 0.0 && d3 * d4 < 0.0
+}
+
+/// Winding number of closed polygon `poly` around `p`.
+fn winding(poly: &[DVec2], p: DVec2) -> i32 {
+    let mut w = 0;
+    for i in 0..poly.len() {
+        let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+        let side = (b - a).perp_dot(p - a);
+        if a.y <= p.y {
+            if b.y > p.y && side > 0.0 {
+                w += 1;
+            }
+        } else if b.y <= p.y && side < 0.0 {
+            w -= 1;
+        }
+    }
+    w
+}
+
+/// Distance from `p` to the closed polygon `poly`'s outline.
+fn distance_to_polygon(poly: &[DVec2], p: DVec2) -> f64 {
+    (0..poly.len())
+        .map(|i| {
+            let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+            let ab = b - a;
+            let t = if ab.length_squared() > 0.0 { ((p - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0) } else { 0.0 };
+            p.distance(a + ab * t)
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// How regular one grade point's steps are (issue #14, item 4).
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepRegularity {
+    /// Piece name.
+    pub piece: String,
+    /// Grade point label.
+    pub label: String,
+    /// The steps between consecutive sizes, mm, each scaled to the mean
+    /// chart step (`step_k · mean(w) / w_k` for chart steps `w`).
+    pub steps: Vec<DVec2>,
+    /// The largest `|step_k − mean step|`, mm.
+    pub worst_mm: f64,
+    /// What the bar allows: `max(2 mm, 25 % of |mean step|)`, mm.
+    pub allowed_mm: f64,
+    /// Steps whose x or y runs against the mean step's by more than
+    /// [`STEP_SIGN_TOLERANCE_MM`] (a grade point that moves back).
+    pub sign_changes: usize,
+}
+
+/// A step component smaller than this has no sign, mm (below what a
+/// pattern maker's ruler shows).
+pub const STEP_SIGN_TOLERANCE_MM: f64 = 0.5;
+
+/// The step regularity of every grade point of `table`; `chart_steps`, where
+/// given (one per consecutive pair of sizes, any unit), are the chart steps
+/// of the governing girth that the grade steps are scaled by (an uneven
+/// chart).
+pub fn step_regularity(table: &GradeRuleTable, chart_steps: Option<&[f64]>) -> Vec<StepRegularity> {
+    let mut out = Vec::new();
+    for piece in &table.pieces {
+        for r in &piece.rules {
+            let raw: Vec<DVec2> = r.deltas.windows(2).map(|w| w[1] - w[0]).collect();
+            if raw.is_empty() {
+                continue;
+            }
+            let steps: Vec<DVec2> = match chart_steps.filter(|c| c.len() == raw.len() && c.iter().all(|&w| w > 0.0)) {
+                Some(c) => {
+                    let mean_w = c.iter().sum::<f64>() / c.len() as f64;
+                    raw.iter().zip(c).map(|(s, w)| *s * (mean_w / w)).collect()
+                }
+                None => raw,
+            };
+            let mean = steps.iter().copied().sum::<DVec2>() / steps.len() as f64;
+            let worst_mm = steps.iter().map(|s| s.distance(mean)).fold(0.0, f64::max);
+            let against = |v: f64, m: f64| m.abs() > STEP_SIGN_TOLERANCE_MM && v * m.signum() < -STEP_SIGN_TOLERANCE_MM;
+            let sign_changes = steps.iter().filter(|s| against(s.x, mean.x) || against(s.y, mean.y)).count();
+            out.push(StepRegularity {
+                piece: piece.piece.clone(),
+                label: r.label.clone(),
+                steps,
+                worst_mm,
+                allowed_mm: (0.25 * mean.length()).max(2.0),
+                sign_changes,
+            });
+        }
+    }
+    out
+}
+
 fn find_point(p: &PatternPiece, node: u32, kind: GradePointKind) -> Option<DVec2> {
     p.grade_points.iter().find(|g| g.node == node && g.kind == kind).map(|g| g.at)
 }
@@ -171,5 +322,38 @@ mod tests {
         broken[2].1.clear();
         assert!(matches!(nests(&broken).unwrap_err(), GradeError::MissingPiece { .. }));
         assert_eq!(nests(&[]).unwrap_err(), GradeError::NoSizes);
+        // the planted grade is a nest that nests and steps evenly
+        let nest = nests(&sizes).expect("nest");
+        for step in nest_steps(&nest) {
+            assert_eq!((step.crossings, step.outside), (0, 0), "{step:?}");
+        }
+        for r in step_regularity(&t, None) {
+            assert!(r.worst_mm < 1e-9 && r.sign_changes == 0, "{r:?}");
+        }
+    }
+
+    #[test]
+    fn crossing_outlines_and_uneven_steps_are_counted() {
+        // a square, then a rectangle wider but shorter: the outlines cross twice and two
+        // corners of the first lie outside the second
+        let mut wide = square("s1", 120.0);
+        wide.sew_line = vec![DVec2::ZERO, DVec2::new(120.0, 0.0), DVec2::new(120.0, -80.0), DVec2::new(0.0, -80.0)];
+        wide.grade_points[2].at = DVec2::new(120.0, -80.0);
+        wide.grade_points[3].at = DVec2::new(0.0, -80.0);
+        let sizes = vec![("s0".to_string(), vec![square("s0", 100.0)]), ("s1".to_string(), vec![wide])];
+        let steps = nest_steps(&nests(&sizes).expect("nest"));
+        assert_eq!(steps.len(), 1);
+        // the sides x = 100 (down to −100) and y = −80 cross once; the bottom corners are outside
+        assert_eq!((steps[0].crossings, steps[0].outside), (1, 2), "{:?}", steps[0]);
+        // steps +20, +20, −5 of one point: the last runs back; scaled by a chart whose last
+        // step is a quarter of the others it is +20 again
+        let mut t = grade_rules("t", &sizes, "s0").expect("rules");
+        t.pieces[0].rules[1].deltas =
+            vec![DVec2::ZERO, DVec2::new(20.0, 0.0), DVec2::new(40.0, 0.0), DVec2::new(35.0, 0.0)];
+        let r = &step_regularity(&t, None)[1];
+        assert_eq!(r.sign_changes, 1, "{r:?}");
+        assert!(r.worst_mm > r.allowed_mm, "{r:?}");
+        let scaled = &step_regularity(&t, Some(&[4.0, 4.0, -1.0]))[1];
+        assert_eq!(scaled.steps.len(), 3, "a chart step that is not positive leaves the steps unscaled");
     }
 }

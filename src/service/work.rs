@@ -5,12 +5,16 @@
 //! - [`size_chart`]: one mannequin per size row (seed 003 sizing, see
 //!   [`crate::mannequin::fit`]), every template graded on every size, the
 //!   graded nest and grade rules per template (issue #5), per-size meshes and
-//!   patterns, and the fit report.
+//!   patterns, and the fit report. The base size is graded first and its
+//!   dart plan carried to every other size (issue #14: one dart plan per
+//!   run, [`crate::pattern::garment::DartPlan`]).
 //! - [`scan`]: one body scan with its landmarks, one template.
-//! - [`bodies`]: many scans × templates (the batch flow's bodies part).
+//! - [`bodies`]: many scans × templates (the batch flow's bodies part); with
+//!   several bodies the base body's dart plan is carried to the others.
 //!
-//! Determinism: every artefact is a function of the inputs only — sizes and
-//! templates are processed in request order and the report carries no wall
+//! Determinism: every artefact is a function of the inputs only — the base
+//! size first, then the others in request order; the artefacts and the report
+//! list sizes and templates in request order, and the report carries no wall
 //! times (those go to [`Outcome::timings`], outside the artefacts).
 
 use std::collections::BTreeMap;
@@ -33,9 +37,10 @@ use crate::mannequin::fit::{fit_size, FitError, FitOptions};
 use crate::mannequin::model::{BodyModel, MannequinError};
 use crate::mannequin::size_chart::{Sex, SizeChart};
 use crate::pattern::export::{dxf, rul, svg, ExportError};
+use crate::pattern::garment::DartPlan;
 use crate::pattern::grade::{grade_rules, nests, GradeError};
 use crate::pattern::piece::PatternPiece;
-use crate::pipeline::{grade, GradeOptions, Graded, PipelineError};
+use crate::pipeline::{grade_with_plan, GradeOptions, Graded, PipelineError};
 use crate::template::format::Template;
 
 /// Why a flow failed. Client-caused variants name the offending input.
@@ -255,13 +260,17 @@ pub fn read_body(input: &BodyInput<'_>, opts: &WorkOptions) -> Result<FeatureBod
     derive_features(mesh, &lm, &DeriveOptions::default()).map_err(|source| WorkError::Feature { body: name, source })
 }
 
-/// Grades every template on one body and writes its per-size artefacts.
+/// Grades every template on one body and writes its per-size artefacts;
+/// `plans[i]`, where given, is template `i`'s dart plan from the run's base
+/// size (unless [`crate::pattern::garment::PatternOptions::search_every_size`]).
+#[expect(clippy::too_many_arguments, reason = "one body of a run: its inputs, the run's plans, timer and artefacts")]
 fn grade_body(
     ctx: &WorkContext,
     templates: &[Template],
     body: &FeatureBody,
     size: &str,
     cache_obstacle: bool,
+    plans: Option<&[DartPlan]>,
     timer: &mut Timer,
     out: &mut Vec<Artefact>,
 ) -> Result<Vec<(String, Graded, serde_json::Value)>, WorkError> {
@@ -269,12 +278,11 @@ fn grade_body(
     let obstacle = ctx.obstacle(&body.mesh, cache_obstacle)?;
     timer.add(stage::OBSTACLE, start);
     let mut graded = Vec::with_capacity(templates.len());
-    for t in templates {
-        let g = grade(t, body, obstacle.as_deref(), size, &ctx.opts.grade).map_err(|source| WorkError::Grade {
-            template: t.name.clone(),
-            size: size.to_owned(),
-            source,
-        })?;
+    let carry = !ctx.opts.grade.pattern.search_every_size;
+    for (i, t) in templates.iter().enumerate() {
+        let plan = plans.filter(|_| carry).and_then(|p| p.get(i));
+        let g = grade_with_plan(t, body, obstacle.as_deref(), size, &ctx.opts.grade, plan)
+            .map_err(|source| WorkError::Grade { template: t.name.clone(), size: size.to_owned(), source })?;
         timer.add_ms(stage::DECODE, g.timings.decode_ms);
         timer.add_ms(stage::REFINE, g.timings.refine_ms);
         timer.add_ms(stage::CLEAR, g.timings.clear_ms);
@@ -474,14 +482,25 @@ pub fn size_chart(
     let mut sizes = Vec::new();
     let total = chart.rows.len();
     let fit_opts = FitOptions::for_sex(chart.sex);
-    for (done, row) in chart.rows.iter().enumerate() {
+    // the base size first: its dart plan is carried to every other size (one plan per run)
+    let base_row = chart.rows.iter().position(|r| r.size == base).unwrap_or(0);
+    let order = std::iter::once(base_row).chain((0..total).filter(|&i| i != base_row));
+    let mut done_rows: Vec<Option<(Vec<(String, Graded, serde_json::Value)>, serde_json::Value, Vec<Artefact>)>> =
+        vec![None; total];
+    let mut plans: Option<Vec<DartPlan>> = None;
+    for (done, i) in order.enumerate() {
+        let row = &chart.rows[i];
         progress(stage::FIT, done, total);
         let start = Instant::now();
         let fitted =
             fit_size(model, row, &fit_opts).map_err(|source| WorkError::Fit { size: row.size.clone(), source })?;
         timer.add(stage::FIT, start);
         progress(stage::REFINE, done, total);
-        let graded = grade_body(ctx, templates, &fitted.body, &row.size, true, &mut timer, &mut artefacts)?;
+        let mut out = Vec::new();
+        let graded = grade_body(ctx, templates, &fitted.body, &row.size, true, plans.as_deref(), &mut timer, &mut out)?;
+        if plans.is_none() {
+            plans = Some(graded.iter().map(|(_, g, _)| g.pattern.dart_plan.clone()).collect());
+        }
         let residuals: BTreeMap<&str, serde_json::Value> = fitted
             .residuals
             .iter()
@@ -492,6 +511,12 @@ pub fn size_chart(
                 )
             })
             .collect();
+        done_rows[i] = Some((graded, serde_json::json!(residuals), out));
+    }
+    // reported in the chart's order
+    for (row, done) in chart.rows.iter().zip(done_rows) {
+        let Some((graded, residuals, out)) = done else { continue };
+        artefacts.extend(out);
         let garments = collect(graded, &row.size, &mut per_template);
         sizes.push(serde_json::json!({"size": row.size, "mannequin": {"residuals": residuals}, "garments": garments}));
     }
@@ -528,16 +553,32 @@ pub fn bodies(
     let mut per_template: Vec<Vec<(String, Vec<PatternPiece>)>> = vec![Vec::new(); templates.len()];
     let mut reports = Vec::new();
     let total = inputs.len();
-    for (done, input) in inputs.iter().enumerate() {
+    // the base body first (several bodies: a run): its dart plan is carried to the others
+    let base_at = base.and_then(|b| inputs.iter().position(|i| i.name == b)).unwrap_or(0);
+    let order = std::iter::once(base_at).chain((0..total).filter(|&i| i != base_at));
+    let mut done_bodies: Vec<Option<(Vec<(String, Graded, serde_json::Value)>, serde_json::Value, Vec<Artefact>)>> =
+        vec![None; total];
+    let mut plans: Option<Vec<DartPlan>> = None;
+    for (done, i) in order.enumerate() {
+        let input = &inputs[i];
         progress(stage::BODY, done, total);
         let start = Instant::now();
         let body = read_body(input, &ctx.opts)?;
         timer.add(stage::BODY, start);
         progress(stage::REFINE, done, total);
-        let graded = grade_body(ctx, templates, &body, input.name, false, &mut timer, &mut artefacts)?;
-        let garments = collect(graded, input.name, &mut per_template);
+        let mut out = Vec::new();
+        let graded = grade_body(ctx, templates, &body, input.name, false, plans.as_deref(), &mut timer, &mut out)?;
+        if plans.is_none() {
+            plans = Some(graded.iter().map(|(_, g, _)| g.pattern.dart_plan.clone()).collect());
+        }
         let measurements: BTreeMap<&str, f64> =
             measure(&body, &MeasureOptions::default()).iter().map(|(id, v)| (id.as_str(), *v)).collect();
+        done_bodies[i] = Some((graded, serde_json::json!(measurements), out));
+    }
+    for (input, done) in inputs.iter().zip(done_bodies) {
+        let Some((graded, measurements, out)) = done else { continue };
+        artefacts.extend(out);
+        let garments = collect(graded, input.name, &mut per_template);
         reports.push(serde_json::json!({"body": input.name, "measurements_m": measurements, "garments": garments}));
     }
     if inputs.len() > 1 {
