@@ -25,6 +25,10 @@ enum Command {
         #[arg(long, default_value = "curvy")]
         figure: String,
     },
+    /// Grade a size chart or body scans offline and write exactly the artefacts the
+    /// service returns for the same input (patterns, nests, grade rules, meshes, report).
+    /// Exit code 2: bad input (the message names the file); 1: the grade failed.
+    Grade(GradeArgs),
     /// Derive the feature human model of a body scan and print its measurements and frames.
     Measure {
         /// The body (GLB or glTF with embedded buffers).
@@ -58,6 +62,45 @@ enum Command {
         what: DataCommand,
     },
 }
+
+/// `grade3d grade`: a size chart (`--chart`) or scans (`--scan` with `--landmarks`).
+#[derive(clap::Args)]
+struct GradeArgs {
+    /// The size chart, CSV or JSON (the service's `POST /v1/grade/size-chart` flow).
+    #[arg(long, conflicts_with = "scan", required_unless_present = "scan")]
+    chart: Option<PathBuf>,
+    /// A body scan, GLB (repeat for several bodies: a run whose nests span them).
+    #[arg(long)]
+    scan: Vec<PathBuf>,
+    /// The landmarks JSON of each `--scan`, in the same order.
+    #[arg(long)]
+    landmarks: Vec<PathBuf>,
+    /// Templates: built-in names or template JSON files, comma-separated.
+    #[arg(long, value_delimiter = ',', required = true)]
+    templates: Vec<String>,
+    /// The base size of the grade rules (a chart's size, or a scan's file stem).
+    /// Default: the chart's middle row, or the first scan.
+    #[arg(long)]
+    base_size: Option<String>,
+    /// ASTM figure type of a women's chart without it (curvy or straight).
+    #[arg(long)]
+    figure: Option<String>,
+    /// Output folder (created; existing files of the same names are replaced).
+    #[arg(long)]
+    out: PathBuf,
+}
+
+/// Bad input to a command: exit code 2.
+#[derive(Debug)]
+struct BadInput(String);
+
+impl std::fmt::Display for BadInput {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for BadInput {}
 
 #[derive(Subcommand)]
 enum DataCommand {
@@ -103,7 +146,11 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e}");
-            ExitCode::FAILURE
+            if e.downcast_ref::<BadInput>().is_some() {
+                ExitCode::from(2)
+            } else {
+                ExitCode::FAILURE
+            }
         }
     }
 }
@@ -152,6 +199,7 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
             }
         }
         Command::FitChart { chart, figure } => fit_chart(&chart, &figure)?,
+        Command::Grade(args) => grade_offline(&args)?,
         Command::Flatten { panel, json: _, plain } => flatten_panel(&panel, plain)?,
         Command::Panels { dir } => write_panels(&dir)?,
         Command::Measure { body, landmarks } => measure_body(&body, &landmarks)?,
@@ -203,6 +251,120 @@ fn write_fixtures(dir: &std::path::Path) -> Result<(), Box<dyn std::error::Error
         println!("wrote size {}", row.size);
     }
     std::fs::write(astm.join("fit-report.json"), serde_json::to_string_pretty(&report)? + "\n")?;
+    Ok(())
+}
+
+/// `grade3d grade` (see [`GradeArgs`]): the service's flows
+/// (`grade3d::service::work`) run here, their artefacts written to `--out`.
+fn grade_offline(args: &GradeArgs) -> Result<(), Box<dyn std::error::Error>> {
+    use grade3d::collide::cache::{ObstacleCache, ObstacleCacheOptions};
+    use grade3d::collide::render::GpuContext;
+    use grade3d::mannequin::size_chart;
+    use grade3d::service::problem::Problem;
+    use grade3d::service::work::{self, BodyInput, WorkContext, WorkOptions};
+    use grade3d::template::format::Template;
+
+    let bad = |m: String| -> Box<dyn std::error::Error> { Box::new(BadInput(m)) };
+    let read = |p: &std::path::Path| std::fs::read(p).map_err(|e| bad(format!("{}: {e}", p.display())));
+    let text = |p: &std::path::Path| -> Result<String, Box<dyn std::error::Error>> {
+        String::from_utf8(read(p)?).map_err(|_| bad(format!("{}: not UTF-8 text", p.display())))
+    };
+    // templates: built-in names, or template JSON files
+    let library = grade3d::template::library::builtin().map_err(|(n, e)| format!("built-in template {n}: {e}"))?;
+    let mut templates: Vec<Template> = Vec::with_capacity(args.templates.len());
+    for name in &args.templates {
+        let t = match library.iter().find(|t| &t.name == name) {
+            Some(t) => t.clone(),
+            None if std::path::Path::new(name).is_file() => {
+                Template::from_json(&text(std::path::Path::new(name))?).map_err(|e| bad(format!("{name}: {e}")))?
+            }
+            None => {
+                let known: Vec<&str> = library.iter().map(|t| t.name.as_str()).collect();
+                return Err(bad(format!("--templates: no built-in template or file `{name}` (built-in: {known:?})")));
+            }
+        };
+        templates.push(t);
+    }
+    let gpu = match GpuContext::new() {
+        Ok(g) => Some(std::sync::Arc::new(g)),
+        Err(e) => {
+            tracing::warn!(error = %e, "no wgpu adapter: grading without collision avoidance");
+            None
+        }
+    };
+    let ctx = WorkContext {
+        gpu,
+        obstacles: std::sync::Arc::new(ObstacleCache::new(ObstacleCacheOptions::default())),
+        opts: WorkOptions::default(),
+    };
+    let bar = indicatif::ProgressBar::new(0);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{spinner} {msg:>8} [{bar:30}] {pos}/{len} {elapsed}")
+            .map_err(|e| e.to_string())?
+            .progress_chars("=> "),
+    );
+    let progress = |stage: &str, done: usize, total: usize| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+        bar.set_message(stage.to_owned());
+    };
+    // bad input is the caller's (exit 2), anything else a failure (exit 1)
+    let fail = |e: work::WorkError, file: &std::path::Path| -> Box<dyn std::error::Error> {
+        let m = format!("{}: {e}", file.display());
+        let status = Problem::from(e).status;
+        if (400..500).contains(&status) {
+            bad(m)
+        } else {
+            m.into()
+        }
+    };
+    let outcome = if let Some(chart_path) = &args.chart {
+        let mut opts = size_chart::SizeChartOptions::default();
+        match args.figure.as_deref() {
+            None => {}
+            Some("curvy") => opts.figure = size_chart::FigureType::Curvy,
+            Some("straight") => opts.figure = size_chart::FigureType::Straight,
+            Some(other) => return Err(bad(format!("--figure: `{other}` is not curvy or straight"))),
+        }
+        let t = text(chart_path)?;
+        let chart = if t.trim_start().starts_with('{') {
+            size_chart::parse_json(&t, &opts)
+        } else {
+            size_chart::parse_csv(&t, &opts)
+        }
+        .map_err(|e| bad(format!("{}: {e}", chart_path.display())))?;
+        work::size_chart(&ctx, &templates, &chart, args.base_size.as_deref(), &progress)
+            .map_err(|e| fail(e, chart_path))?
+    } else {
+        if args.landmarks.len() != args.scan.len() {
+            return Err(bad(format!(
+                "{} --scan but {} --landmarks: give one landmarks file per scan",
+                args.scan.len(),
+                args.landmarks.len()
+            )));
+        }
+        let mut bodies = Vec::with_capacity(args.scan.len());
+        for (scan, lm) in args.scan.iter().zip(&args.landmarks) {
+            // one scan is named as the service names it; several by their file stems
+            let name = if args.scan.len() == 1 {
+                "scan".to_owned()
+            } else {
+                scan.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default()
+            };
+            bodies.push((name, read(scan)?, text(lm)?, scan.clone()));
+        }
+        let inputs: Vec<BodyInput<'_>> =
+            bodies.iter().map(|(n, g, l, _)| BodyInput { name: n, glb: g, landmarks: l }).collect();
+        let first = args.scan.first().cloned().unwrap_or_default();
+        work::bodies(&ctx, &templates, &inputs, args.base_size.as_deref(), &progress).map_err(|e| fail(e, &first))?
+    };
+    bar.finish_and_clear();
+    std::fs::create_dir_all(&args.out).map_err(|e| bad(format!("{}: {e}", args.out.display())))?;
+    for a in &outcome.artefacts {
+        let path = args.out.join(&a.name);
+        std::fs::write(&path, &a.bytes).map_err(|e| format!("{}: {e}", path.display()))?;
+    }
+    println!("wrote {} artefacts to {}", outcome.artefacts.len(), args.out.display());
     Ok(())
 }
 

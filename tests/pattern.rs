@@ -11,13 +11,13 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use grade3d::body::derive::{derive_features, DeriveOptions};
+use grade3d::body::measure::girth_of;
+use grade3d::body::vocab::CurveId;
 use grade3d::collide::cache::Obstacle;
 use grade3d::collide::render::{GpuContext, RenderOptions};
 use grade3d::geom::winding::{penetration_stats, WindingOptions, WindingTree};
 use grade3d::pattern::export::{dxf, rul, svg};
 use grade3d::pattern::garment::DartPlan;
-use grade3d::body::measure::girth_of;
-use grade3d::body::vocab::CurveId;
 use grade3d::pattern::grade::{grade_rules, nest_steps, nests, step_regularity};
 use grade3d::pattern::piece::PatternPiece;
 use grade3d::pipeline::{grade_with_plan, GradeOptions};

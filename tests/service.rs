@@ -317,6 +317,73 @@ fn writes_are_refused_without_a_configured_key_and_reads_can_be_protected() {
     call("DELETE", &s.url("/v1/templates/trousers"), &[(a, &k)], None).problem(403, None);
 }
 
+/// Issue #14 item 7: `grade3d grade` writes exactly the artefacts the service
+/// returns for the same chart; bad input exits 2 naming the file.
+#[test]
+fn grade_command_writes_the_services_artefacts() {
+    let s = Server::start(&temp_dir("cli"), &[]);
+    let csv = "size,unit,bust_girth,waist_girth_curvy,hip_girth\n8,in,35.5,28.375,38\n10,in,36.5,29.375,39\n";
+    let r = call(
+        "POST",
+        &s.url("/v1/grade/size-chart?templates=straight-skirt&base_size=8"),
+        &[("Content-Type", "text/csv")],
+        Some(csv.as_bytes()),
+    );
+    assert_eq!(r.status, 200, "{}", r.text());
+    let j = r.json();
+    let dir = temp_dir("cli-out");
+    let chart = dir.join("chart.csv");
+    std::fs::write(&chart, csv).unwrap();
+    let out = dir.join("out");
+    let run = |args: &[&std::ffi::OsStr]| {
+        Command::new(env!("CARGO_BIN_EXE_grade3d")).arg("grade").args(args).env("RUST_LOG", "warn").output().unwrap()
+    };
+    let ok = run(&[
+        "--chart".as_ref(),
+        chart.as_os_str(),
+        "--templates".as_ref(),
+        "straight-skirt".as_ref(),
+        "--base-size".as_ref(),
+        "8".as_ref(),
+        "--out".as_ref(),
+        out.as_os_str(),
+    ]);
+    assert!(ok.status.success(), "{}", String::from_utf8_lossy(&ok.stderr));
+    let arts = j["artefacts"].as_array().unwrap();
+    let written = std::fs::read_dir(&out).unwrap().count();
+    assert_eq!(written, arts.len(), "one file per artefact");
+    for a in arts {
+        let name = a["name"].as_str().unwrap();
+        let served = call("GET", &s.url(&format!("{}/{name}", j["href"].as_str().unwrap())), &[], None);
+        assert_eq!(served.status, 200, "{name}");
+        let mine = std::fs::read(out.join(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert!(mine == served.body, "{name}: the command's bytes differ from the service's");
+    }
+    // bad input: exit 2, the message names the file
+    let missing = dir.join("missing.csv");
+    let e = run(&[
+        "--chart".as_ref(),
+        missing.as_os_str(),
+        "--templates".as_ref(),
+        "trousers".as_ref(),
+        "--out".as_ref(),
+        out.as_os_str(),
+    ]);
+    assert_eq!(e.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&e.stderr).contains("missing.csv"), "{}", String::from_utf8_lossy(&e.stderr));
+    std::fs::write(&chart, "size,unit,shoe_size\n8,in,9\n").unwrap();
+    let e = run(&[
+        "--chart".as_ref(),
+        chart.as_os_str(),
+        "--templates".as_ref(),
+        "trousers".as_ref(),
+        "--out".as_ref(),
+        out.as_os_str(),
+    ]);
+    assert_eq!(e.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&e.stderr).contains("chart.csv"), "{}", String::from_utf8_lossy(&e.stderr));
+}
+
 #[test]
 fn size_chart_flow_json_and_csv() {
     let s = Server::start(&temp_dir("chart"), &[]);

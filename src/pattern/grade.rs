@@ -158,10 +158,8 @@ pub fn nest_steps(nest: &[(String, Vec<PatternPiece>)]) -> Vec<NestStep> {
                     }
                 }
             }
-            let outside = a
-                .iter()
-                .filter(|&&p| winding(b, p) == 0 && distance_to_polygon(b, p) > NEST_TOUCH_MM)
-                .count();
+            let outside =
+                a.iter().filter(|&&p| winding(b, p) == 0 && distance_to_polygon(b, p) > NEST_TOUCH_MM).count();
             out.push(NestStep {
                 piece: piece.clone(),
                 smaller: w[0].size.clone(),
@@ -205,7 +203,8 @@ fn distance_to_polygon(poly: &[DVec2], p: DVec2) -> f64 {
         .map(|i| {
             let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
             let ab = b - a;
-            let t = if ab.length_squared() > 0.0 { ((p - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0) } else { 0.0 };
+            let t =
+                if ab.length_squared() > 0.0 { ((p - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0) } else { 0.0 };
             p.distance(a + ab * t)
         })
         .fold(f64::INFINITY, f64::min)

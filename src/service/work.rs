@@ -260,6 +260,11 @@ pub fn read_body(input: &BodyInput<'_>, opts: &WorkOptions) -> Result<FeatureBod
     derive_features(mesh, &lm, &DeriveOptions::default()).map_err(|source| WorkError::Feature { body: name, source })
 }
 
+/// One graded body of a run, kept until the run is reported in request
+/// order: its grades (template name, grade, fit figures), its report part
+/// (residuals or measurements) and its artefacts.
+type Done = (Vec<(String, Graded, serde_json::Value)>, serde_json::Value, Vec<Artefact>);
+
 /// Grades every template on one body and writes its per-size artefacts;
 /// `plans[i]`, where given, is template `i`'s dart plan from the run's base
 /// size (unless [`crate::pattern::garment::PatternOptions::search_every_size`]).
@@ -485,8 +490,7 @@ pub fn size_chart(
     // the base size first: its dart plan is carried to every other size (one plan per run)
     let base_row = chart.rows.iter().position(|r| r.size == base).unwrap_or(0);
     let order = std::iter::once(base_row).chain((0..total).filter(|&i| i != base_row));
-    let mut done_rows: Vec<Option<(Vec<(String, Graded, serde_json::Value)>, serde_json::Value, Vec<Artefact>)>> =
-        vec![None; total];
+    let mut done_rows: Vec<Option<Done>> = vec![None; total];
     let mut plans: Option<Vec<DartPlan>> = None;
     for (done, i) in order.enumerate() {
         let row = &chart.rows[i];
@@ -556,8 +560,7 @@ pub fn bodies(
     // the base body first (several bodies: a run): its dart plan is carried to the others
     let base_at = base.and_then(|b| inputs.iter().position(|i| i.name == b)).unwrap_or(0);
     let order = std::iter::once(base_at).chain((0..total).filter(|&i| i != base_at));
-    let mut done_bodies: Vec<Option<(Vec<(String, Graded, serde_json::Value)>, serde_json::Value, Vec<Artefact>)>> =
-        vec![None; total];
+    let mut done_bodies: Vec<Option<Done>> = vec![None; total];
     let mut plans: Option<Vec<DartPlan>> = None;
     for (done, i) in order.enumerate() {
         let input = &inputs[i];

@@ -1,0 +1,101 @@
+//! Development probe (issue #14): a size chart graded as one run — each
+//! row fitted, the base size graded first and its dart plan carried — and
+//! the grade judged as a set: nest steps (crossings, points outside the
+//! next size), grade-step regularity scaled by the governing girth's chart
+//! steps, and each piece's width per size.
+//!
+//! `cargo run --release --example grade_set_probe -- fixtures/size-charts/mens-36-46-in.csv trousers 42 [hip]`
+
+use std::collections::BTreeMap;
+
+use grade3d::body::measure::MeasurementId;
+use grade3d::collide::cache::Obstacle;
+use grade3d::collide::render::{GpuContext, RenderOptions};
+use grade3d::geom::winding::{WindingOptions, WindingTree};
+use grade3d::mannequin::fit::{fit_size, FitOptions};
+use grade3d::mannequin::model::BodyModel;
+use grade3d::mannequin::size_chart::{parse_csv, SizeChartOptions};
+use grade3d::pattern::grade::{grade_rules, nest_steps, nests, step_regularity};
+use grade3d::pattern::piece::PatternPiece;
+use grade3d::pipeline::{grade_with_plan, GradeOptions};
+use grade3d::template::library::builtin;
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let chart_path = args.get(1).cloned().unwrap_or_else(|| "fixtures/size-charts/mens-36-46-in.csv".into());
+    let which = args.get(2).cloned().unwrap_or_else(|| "trousers".into());
+    let base = args.get(3).cloned().unwrap_or_else(|| "42".into());
+    let governing = match args.get(4).map(String::as_str).unwrap_or("hip") {
+        "chest" => MeasurementId::ChestGirth,
+        "bust" => MeasurementId::BustGirth,
+        "waist" => MeasurementId::WaistGirth,
+        _ => MeasurementId::HipGirth,
+    };
+    let chart = parse_csv(&std::fs::read_to_string(&chart_path).unwrap(), &SizeChartOptions::default()).unwrap();
+    let t = builtin().unwrap().into_iter().find(|t| t.name.contains(which.as_str())).unwrap();
+    let gpu = GpuContext::new().unwrap();
+    let model = BodyModel::embedded().unwrap();
+    let fit_opts = FitOptions::for_sex(chart.sex);
+    let each = std::env::var("EACH").is_ok();
+    let base_row = chart.rows.iter().position(|r| r.size == base).unwrap();
+    let order: Vec<usize> = std::iter::once(base_row).chain((0..chart.rows.len()).filter(|&i| i != base_row)).collect();
+    let mut plan = None;
+    let mut by_row: BTreeMap<usize, Vec<PatternPiece>> = BTreeMap::new();
+    for i in order {
+        let row = &chart.rows[i];
+        let fitted = fit_size(model, row, &fit_opts).unwrap();
+        let body = &fitted.body;
+        if std::env::var("PARAMS").is_ok() {
+            println!("{} params {:?}", row.size, serde_json::to_string(&fitted.params).unwrap());
+            println!("{} scales {:?}", row.size, fitted.profile_scales);
+        }
+        let maps = gpu.render(&body.mesh, &RenderOptions::default()).unwrap();
+        let obstacle = Obstacle { maps, tree: WindingTree::new(&body.mesh, &WindingOptions::default()) };
+        let g = grade_with_plan(&t, body, Some(&obstacle), &row.size, &GradeOptions::default(), plan.as_ref()).unwrap();
+        let line: Vec<String> = g
+            .pattern
+            .reports
+            .iter()
+            .map(|r| format!("{} {:.2}% [{}]", r.name, r.distortion.strain_p95 * 100.0, r.found_darts.len()))
+            .collect();
+        println!("{}: {}", row.size, line.join(", "));
+        if plan.is_none() && !each {
+            plan = Some(g.pattern.dart_plan.clone());
+        }
+        by_row.insert(i, g.pattern.pieces);
+    }
+    let sizes: Vec<(String, Vec<PatternPiece>)> =
+        by_row.into_iter().map(|(i, p)| (chart.rows[i].size.clone(), p)).collect();
+    let nest = nests(&sizes).unwrap();
+    for (piece, all) in &nest {
+        let widths: Vec<String> = all
+            .iter()
+            .map(|p| {
+                let xs = p.sew_line.iter().map(|q| q.x);
+                format!("{:.0}", xs.clone().fold(f64::MIN, f64::max) - xs.fold(f64::MAX, f64::min))
+            })
+            .collect();
+        println!("{piece} widths: {}", widths.join(" "));
+    }
+    for st in nest_steps(&nest) {
+        println!("  {} {}→{}: crossings {}, outside {}", st.piece, st.smaller, st.larger, st.crossings, st.outside);
+    }
+    let rules = grade_rules(&t.name, &sizes, &base).unwrap();
+    let girths: Vec<f64> = chart.rows.iter().map(|r| r.targets.get(&governing).copied().unwrap_or(0.0) * 1e3).collect();
+    let steps: Vec<f64> = girths.windows(2).map(|w| w[1] - w[0]).collect();
+    println!("chart steps of {governing:?}: {steps:?}");
+    let reg = step_regularity(&rules, Some(&steps));
+    for r in &reg {
+        let s: Vec<String> = r.steps.iter().map(|v| format!("({:.1},{:.1})", v.x, v.y)).collect();
+        let flag = if r.worst_mm > r.allowed_mm || r.sign_changes > 0 { "!" } else { " " };
+        println!(
+            "{flag} {} {}: worst {:.1} / {:.1} mm, signs {}: {}",
+            r.piece,
+            r.label,
+            r.worst_mm,
+            r.allowed_mm,
+            r.sign_changes,
+            s.join(" ")
+        );
+    }
+}
