@@ -44,7 +44,8 @@ fn main() {
         let body = derive_features(mesh, &lm, &DeriveOptions::default()).unwrap();
         let maps = gpu.render(&body.mesh, &RenderOptions::default()).unwrap();
         let obstacle = Obstacle { maps, tree: WindingTree::new(&body.mesh, &WindingOptions::default()) };
-        let g = match grade_with_plan(&t, &body, Some(&obstacle), size, &go, if each { None } else { plan.as_ref() }) {
+        let ob = if std::env::var("NOCOLLIDE").is_ok() { None } else { Some(&obstacle) };
+        let g = match grade_with_plan(&t, &body, ob, size, &go, if each { None } else { plan.as_ref() }) {
             Ok(g) => g,
             Err(e) => {
                 println!("{size}: ERROR {e}");
@@ -59,7 +60,8 @@ fn main() {
             if d.strain_p95 > 0.04 {
                 above4 += 1;
             }
-            let darts: Vec<String> = r.found_darts.iter().map(|f| format!("{:.0}", f.intake_mm)).collect();
+            let darts: Vec<String> =
+                r.found_darts.iter().map(|f| format!("{:.0}{:?}", f.intake_mm, f.origin)).collect();
             line += &format!(
                 " {}:{:.2}%/{:.2}% flips {} [{}]",
                 r.name,
@@ -71,6 +73,12 @@ fn main() {
         }
         if !g.pattern.darts_left_out.is_empty() {
             line += &format!(" out:{:?}", g.pattern.darts_left_out.iter().map(|d| d.0.clone()).collect::<Vec<_>>());
+        }
+        for [l, r] in &t.mirror_pairs {
+            let piece = |n: &str| g.pattern.pieces.iter().find(|p| p.name == n).unwrap();
+            let d = grade3d::pattern::grade::mirror_difference(piece(l), piece(r));
+            line +=
+                &format!(" | {l}/{r} {:.3}% {:.2} mm", d.area_pct.max(d.width_pct).max(d.height_pct), d.sew_line_mm);
         }
         println!("{line}");
         if plan.is_none() {

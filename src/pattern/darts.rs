@@ -114,6 +114,26 @@ pub struct FoundDart {
     pub strain_p95_after: f64,
     /// Apex, 3D, metres (where the strain gathered).
     pub apex: DVec3,
+    /// How this piece got it.
+    #[serde(default)]
+    pub origin: DartOrigin,
+}
+
+/// How a piece got a found dart (issue #14: one dart plan per run, mirrored
+/// onto mirror pairs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DartOrigin {
+    /// Searched on this piece, where it strained ([`insert_darts`]); the
+    /// strain figures are the search's.
+    #[default]
+    Found,
+    /// Carried from the run's base size (the strain figures are this
+    /// piece's, before and after alike: nothing was searched here).
+    Carried,
+    /// Mirrored from its mirror pair's dart (the strain figures are the
+    /// pair's search's).
+    Mirrored,
 }
 
 /// Signed opening of a dart in a flattening, in the units of `uv`: the gap
@@ -217,6 +237,7 @@ pub fn insert_darts(
             strain_p95_before: before,
             strain_p95_after: trial.distortion.strain_p95,
             apex: next.positions[path[path.len() - 1] as usize],
+            origin: DartOrigin::Found,
         });
         panel = next;
         best = trial;

@@ -56,7 +56,7 @@ use super::assemble::{
     assemble, deviation_from_chord, polyline_length, polyline_length_3d, self_intersects, PieceError, PieceOptions,
     PlacedPanel, SeamReport,
 };
-use super::darts::{dart_opening, insert_darts, AutoDartOptions, FoundDart, Trial};
+use super::darts::{dart_opening, insert_darts, AutoDartOptions, DartOrigin, FoundDart, Trial};
 use super::flatten::{distortion, flatten_with_sewn_lengths, Distortion, FlattenError, FlattenOptions, Flattening};
 use super::panels::{cut, Panel, PanelError, SeamChain};
 use super::piece::PatternPiece;
@@ -90,6 +90,11 @@ pub struct PatternOptions {
     /// dart plan per grade run; per-size darts differ from size to size,
     /// and a graded nest of them does not stack).
     pub search_every_size: bool,
+    /// How far a mirrored dart's vertex may lie from the mirror image of
+    /// its pair's ([`Template::mirror_pairs`]), mm. Default 5 (a garment
+    /// on a symmetric mannequin mirrors to well under a millimetre; a scan's
+    /// halves differ by centimetres, and each side is searched on its own).
+    pub mirror_tolerance_mm: f64,
 }
 
 impl Default for PatternOptions {
@@ -102,6 +107,7 @@ impl Default for PatternOptions {
             negotiate_seams: true,
             negotiation_power: 2.0,
             search_every_size: false,
+            mirror_tolerance_mm: 10.0,
         }
     }
 }
@@ -332,6 +338,7 @@ fn carry_darts(panel: &mut Panel, planned: &[PlannedDart]) -> Result<Vec<FoundDa
             strain_p95_before: 0.0,
             strain_p95_after: 0.0,
             apex: pts.last().copied().unwrap_or_default(),
+            origin: DartOrigin::Carried,
         });
     }
     Ok(found)
@@ -495,7 +502,18 @@ fn pattern_once(
         // with negotiated seams, the search's last flattening is the free one the negotiation needs
         let mut free: Vec<Option<Trial>> = vec![None; panels.len()];
         if find_darts {
+            // the second panel of a mirror pair takes the first's darts, mirrored (issue #14)
+            let second_of: Vec<Option<usize>> = panels
+                .iter()
+                .map(|p| {
+                    let [a, _] = t.mirror_pairs.iter().find(|[_, b]| *b == p.name)?;
+                    panels.iter().position(|q| q.name == *a)
+                })
+                .collect();
             for (i, panel) in panels.iter_mut().enumerate() {
+                if second_of[i].is_some() {
+                    continue;
+                }
                 let hit = searched[i].as_ref().filter(|(c, _)| *c == cap[i]).map(|(_, s)| s.clone());
                 let found = match hit {
                     Some(found) => found,
@@ -507,6 +525,26 @@ fn pattern_once(
                     }
                 };
                 (*panel, found_darts[i], free[i]) = (found.panel, found.darts, Some(found.last));
+            }
+            let plane = mirror_plane(t, positions);
+            for i in 0..panels.len() {
+                let Some(first) = second_of[i] else { continue };
+                let first_panel = panels[first].clone();
+                let mirrored = plane.and_then(|plane| {
+                    mirror_darts(&first_panel, &found_darts[first], &mut panels[i], positions, plane, opts)
+                });
+                match mirrored {
+                    Some(darts) => {
+                        found_darts[i] = darts;
+                        free[i] = Some(flatten_free(&panels[i], &seams, &opts.flatten)?);
+                    }
+                    None => {
+                        // not a mirror image here (a scan): searched on its own
+                        let options = AutoDartOptions { max_darts: cap[i], ..opts.auto_darts };
+                        let found = search_darts(&panels[i], &seams, n_nodes, opts, &options)?;
+                        (panels[i], found_darts[i], free[i]) = (found.panel, found.darts, Some(found.last));
+                    }
+                }
             }
         }
         if let Search::Carry(planned) = search {
@@ -540,6 +578,12 @@ fn pattern_once(
                 && (d.flipped > 0 || sew_line_self_intersects || cut_line_self_intersects)
             {
                 cap[i] = found_darts.len() - 1;
+                // a mirrored panel's darts are its pair's: the pair gives one up
+                if let Some([a, _]) = t.mirror_pairs.iter().find(|[_, b]| *b == panel.name) {
+                    if let Some(j) = cut_panels.iter().position(|q| q.name == *a) {
+                        cap[j] = cap[j].min(cap[i]);
+                    }
+                }
                 refused = true;
             }
             let area_3d_mm2 = panel
@@ -599,6 +643,86 @@ fn pattern_once(
             return Ok((g, checks));
         }
     }
+}
+
+/// The mid-sagittal plane of a garment, `(n, d)` with `n·p = d` on it: `n`
+/// the mean direction from the right to the left node of the template's
+/// node pairs tied to mirrored feature points (`thigh_left`/`thigh_right`;
+/// each point tied to one node), through the mean of their midpoints.
+/// `None` without such pairs.
+fn mirror_plane(t: &Template, positions: &[DVec3]) -> Option<(DVec3, f64)> {
+    let names: Vec<String> = t.nodes.iter().map(|n| n.point.to_string()).collect();
+    let unique = |name: &str| -> Option<usize> {
+        let mut it = names.iter().enumerate().filter(|(_, n)| n.as_str() == name);
+        let first = it.next()?.0;
+        it.next().is_none().then_some(first)
+    };
+    let mut pairs = Vec::new();
+    for (i, name) in names.iter().enumerate() {
+        if !name.contains("left") || unique(name) != Some(i) {
+            continue;
+        }
+        if let Some(j) = unique(&name.replace("left", "right")) {
+            pairs.push((*positions.get(i)?, *positions.get(j)?));
+        }
+    }
+    let n = pairs.iter().map(|(l, r)| *l - *r).sum::<DVec3>().try_normalize()?;
+    let d = pairs.iter().map(|(l, r)| n.dot(0.5 * (*l + *r))).sum::<f64>() / pairs.len() as f64;
+    Some((n, d))
+}
+
+/// `first`'s found darts mirrored across `plane` onto `second` (its mirror
+/// pair): each chain vertex goes to the vertex of `second` nearest to its
+/// mirror image, which must lie within
+/// [`PatternOptions::mirror_tolerance_mm`], and the mirrored chain must be
+/// a path of `second`'s edges that slits. `None` when it is not a mirror
+/// image there (a scan): `second` is left unchanged then.
+fn mirror_darts(
+    first: &Panel,
+    darts: &[FoundDart],
+    second: &mut Panel,
+    positions: &[DVec3],
+    (n, d): (DVec3, f64),
+    opts: &PatternOptions,
+) -> Option<Vec<FoundDart>> {
+    let reflect = |p: DVec3| p - 2.0 * (n.dot(p) - d) * n;
+    let tol = opts.mirror_tolerance_mm * 1e-3;
+    let mut local: std::collections::HashMap<u32, u32> = std::collections::HashMap::new();
+    for (l, &g) in second.global.iter().enumerate() {
+        local.entry(g).or_insert(l as u32);
+    }
+    let mut edges = std::collections::HashSet::new();
+    for f in &second.triangles {
+        for k in 0..3 {
+            let (a, b) = (f[k], f[(k + 1) % 3]);
+            edges.insert((a.min(b), a.max(b)));
+        }
+    }
+    let mut trial = second.clone();
+    let mut out = Vec::with_capacity(darts.len());
+    for dart in darts {
+        let legs = first.darts.iter().find(|l| l.name == dart.name)?;
+        let mut chain = Vec::with_capacity(legs.a.len());
+        for &l in &legs.a {
+            let q = reflect(*positions.get(*first.global.get(l as usize)? as usize)?);
+            let (g, dist) = local
+                .keys()
+                .map(|&g| (g, positions.get(g as usize).map_or(f64::INFINITY, |p| p.distance(q))))
+                .min_by(|a, b| a.1.total_cmp(&b.1))?;
+            if dist > tol {
+                return None;
+            }
+            chain.push(local[&g]);
+        }
+        if chain.windows(2).any(|w| !edges.contains(&(w[0].min(w[1]), w[0].max(w[1])))) {
+            return None;
+        }
+        let name = dart.name.replacen(&first.name, &second.name, 1);
+        trial.add_dart(&name, &chain).ok()?;
+        out.push(FoundDart { name, apex: reflect(dart.apex), origin: DartOrigin::Mirrored, ..dart.clone() });
+    }
+    *second = trial;
+    Some(out)
 }
 
 /// What [`search_darts`] found on one panel.

@@ -269,6 +269,42 @@ pub fn step_regularity(table: &GradeRuleTable, chart_steps: Option<&[f64]>) -> V
     out
 }
 
+/// How far two pieces of a mirror pair are from mirror images (issue #14,
+/// item 2): the second mirrored across the grain line through the stack
+/// point (`x → −x`: pieces are placed stack point at the origin, grain
+/// along −y) and compared with the first.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MirrorDifference {
+    /// |A₁ − A₂| / A₁ of the areas inside the sew lines, %.
+    pub area_pct: f64,
+    /// Relative difference of the widths (x extent), %.
+    pub width_pct: f64,
+    /// Relative difference of the heights (y extent), %.
+    pub height_pct: f64,
+    /// Largest distance from a sew-line point of either piece to the other's
+    /// sew line (a symmetric Hausdorff distance over the vertices), mm.
+    pub sew_line_mm: f64,
+}
+
+/// [`MirrorDifference`] of `a` and `b`.
+pub fn mirror_difference(a: &PatternPiece, b: &PatternPiece) -> MirrorDifference {
+    let mirrored: Vec<DVec2> = b.sew_line.iter().map(|p| DVec2::new(-p.x, p.y)).collect();
+    let area =
+        |poly: &[DVec2]| 0.5 * (0..poly.len()).map(|i| poly[i].perp_dot(poly[(i + 1) % poly.len()])).sum::<f64>().abs();
+    let extent = |poly: &[DVec2], f: fn(&DVec2) -> f64| {
+        let v = poly.iter().map(f);
+        v.clone().fold(f64::MIN, f64::max) - v.fold(f64::MAX, f64::min)
+    };
+    let pct = |x: f64, y: f64| if x.abs() > 0.0 { 100.0 * (x - y).abs() / x.abs() } else { 0.0 };
+    let far = |from: &[DVec2], to: &[DVec2]| from.iter().map(|&p| distance_to_polygon(to, p)).fold(0.0, f64::max);
+    MirrorDifference {
+        area_pct: pct(area(&a.sew_line), area(&mirrored)),
+        width_pct: pct(extent(&a.sew_line, |p| p.x), extent(&mirrored, |p| p.x)),
+        height_pct: pct(extent(&a.sew_line, |p| p.y), extent(&mirrored, |p| p.y)),
+        sew_line_mm: far(&a.sew_line, &mirrored).max(far(&mirrored, &a.sew_line)),
+    }
+}
+
 fn find_point(p: &PatternPiece, node: u32, kind: GradePointKind) -> Option<DVec2> {
     p.grade_points.iter().find(|g| g.node == node && g.kind == kind).map(|g| g.at)
 }
@@ -354,5 +390,28 @@ mod tests {
         assert!(r.worst_mm > r.allowed_mm, "{r:?}");
         let scaled = &step_regularity(&t, Some(&[4.0, 4.0, -1.0]))[1];
         assert_eq!(scaled.steps.len(), 3, "a chart step that is not positive leaves the steps unscaled");
+    }
+
+    #[test]
+    fn a_mirrored_piece_differs_by_nothing_and_a_wider_one_by_its_width() {
+        // an L-shaped piece and its mirror image across x = 0
+        let mut a = square("s", 100.0);
+        a.sew_line = vec![
+            DVec2::ZERO,
+            DVec2::new(100.0, 0.0),
+            DVec2::new(100.0, -40.0),
+            DVec2::new(40.0, -40.0),
+            DVec2::new(40.0, -100.0),
+            DVec2::new(0.0, -100.0),
+        ];
+        let mut b = a.clone();
+        b.sew_line = a.sew_line.iter().rev().map(|p| DVec2::new(-p.x, p.y)).collect();
+        let d = mirror_difference(&a, &b);
+        assert!(d.area_pct < 1e-12 && d.width_pct < 1e-12 && d.height_pct < 1e-12 && d.sew_line_mm < 1e-12, "{d:?}");
+        // the second 2 mm wider on its outer side: 2 % wider, 2 mm off
+        b.sew_line[3].x -= 2.0;
+        b.sew_line[4].x -= 2.0;
+        let d = mirror_difference(&a, &b);
+        assert!((d.width_pct - 2.0).abs() < 1e-9 && (d.sew_line_mm - 2.0).abs() < 1e-9, "{d:?}");
     }
 }

@@ -131,6 +131,8 @@ pub struct Draft {
     pub darts: Vec<(String, String, Vec<u32>)>,
     /// Nodes that hang straight between two others.
     pub hangs: Vec<Hang>,
+    /// Mirror-pair panels (the template's `mirror_pairs`).
+    pub mirror_pairs: Vec<[String; 2]>,
     /// Default grading options.
     pub defaults: GradingDefaults,
 }
@@ -264,6 +266,7 @@ pub fn encode(draft: &Draft, body: &FeatureBody) -> Result<Template, CodecError>
         notches: draft.notches.iter().map(|(n, v)| Notch { name: n.clone(), node: *v }).collect(),
         darts,
         hangs: draft.hangs.clone(),
+        mirror_pairs: draft.mirror_pairs.clone(),
         defaults: draft.defaults.clone(),
     };
     t.validate()?;

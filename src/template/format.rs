@@ -228,6 +228,11 @@ pub struct Template {
     /// Nodes that hang straight between two others (applied in order).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub hangs: Vec<Hang>,
+    /// Panels that are mirror images of each other on a symmetric body,
+    /// `[first, second]` (a left and a right trouser front): darts found on
+    /// the first are mirrored onto the second (issue #14, item 2).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub mirror_pairs: Vec<[String; 2]>,
     /// Default grading options.
     #[serde(default)]
     pub defaults: GradingDefaults,
@@ -531,6 +536,19 @@ impl Template {
                 });
             }
         }
+        let mut paired = std::collections::BTreeSet::new();
+        for [a, b] in &self.mirror_pairs {
+            let bad =
+                |reason: String| TemplateError::BadReference { element: format!("mirror pair `{a}`/`{b}`"), reason };
+            for side in [a, b] {
+                if !names.contains(side.as_str()) {
+                    return Err(bad(format!("panel `{side}` does not exist")));
+                }
+                if !paired.insert(side.as_str()) {
+                    return Err(bad(format!("panel `{side}` is in more than one pair, or paired with itself")));
+                }
+            }
+        }
         for s in &self.seams {
             for side in [&s.panel_a, &s.panel_b] {
                 if !names.contains(side.as_str()) {
@@ -610,6 +628,7 @@ mod tests {
             notches: vec![],
             darts: vec![],
             hangs: vec![],
+            mirror_pairs: vec![],
             defaults: GradingDefaults::default(),
         }
     }

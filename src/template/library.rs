@@ -297,13 +297,26 @@ impl<'a> Builder<'a> {
     }
 
     /// Quads between two rings of equal length, column `i` joining ring
-    /// nodes `i` and `i + 1`; returns the triangles of each column.
+    /// nodes `i` and `i + 1`; returns the triangles of each column. The
+    /// diagonals mirror across the body's mid-sagittal plane (issue #14:
+    /// mirror pairs): a column on the body's left (+X of the centre front)
+    /// is split by `upper_i – lower_j`, one on its right by `upper_j –
+    /// lower_i`, so that a right piece is refined as the mirror image of
+    /// its left one (the same diagonal everywhere gave the right half
+    /// another triangulation, other found darts and another flattening).
     fn band(&mut self, upper: &Ring, lower: &Ring) -> Vec<[usize; 2]> {
         let n = upper.nodes.len();
+        let mid_x = self.body.points.get(&PointId::WaistFront).map_or(0.0, |q| q.position.x);
         (0..n)
             .map(|i| {
                 let j = (i + 1) % n;
-                self.quad(upper.nodes[i], upper.nodes[j], lower.nodes[j], lower.nodes[i])
+                let (ui, uj, lj, li) = (upper.nodes[i], upper.nodes[j], lower.nodes[j], lower.nodes[i]);
+                let x = [ui, uj, lj, li].iter().map(|&v| self.draft.positions[v as usize].x).sum::<f64>() / 4.0;
+                if x >= mid_x {
+                    self.quad(ui, uj, lj, li)
+                } else {
+                    self.quad(uj, lj, li, ui)
+                }
             })
             .collect()
     }
@@ -762,6 +775,7 @@ pub fn trousers(body: &FeatureBody, o: &TrouserOptions) -> Result<Template, Auth
         b.panel(nf, panels[nf].clone(), (kf, af));
         b.panel(nb, panels[nb].clone(), (kb, ab));
     }
+    b.draft.mirror_pairs = vec![["left_front".into(), "right_front".into()], ["left_back".into(), "right_back".into()]];
     let (l, r) = (&legs[0], &legs[1]);
     b.seam("side_left", "left_front", "left_back", vec![waist.nodes[2], h[2], l.3, l.1.nodes[0], l.2.nodes[0]]);
     b.seam("side_right", "right_back", "right_front", vec![waist.nodes[6], h[6], r.3, r.1.nodes[0], r.2.nodes[0]]);
