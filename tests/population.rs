@@ -54,14 +54,6 @@ const EASE_TOLERANCE_MM: f64 = 5.0;
 /// failure fails the test.
 const KNOWN_OPEN: &[(&str, &str, &str)] = &[
     (
-        "trousers triangles through the body",
-        "pop18-m-average-short-scan",
-        "10 pairs left after 12 rounds in the gluteal cleft, 53 mm below the back hip point: two garment \
-         triangles bridge the cleft of this noisy scan, and lifting oscillates between its walls (16 rounds: \
-         24 pairs, 19 rounds: 0); keeping each crease triangle's first way cleared it but broke pop12-scan \
-         (34 pairs, 76 mm lifts)",
-    ),
-    (
         "trousers",
         "pop04-",
         "the thighs are pressed into each other: most intersecting pairs left lie within 30 mm of a crossing \

@@ -205,7 +205,9 @@ pub struct PieceReport {
     /// Whether the cut line crosses itself.
     pub cut_line_self_intersects: bool,
     /// Darts added where the piece strained ([`super::darts`]), in the order
-    /// found; empty when the declared darts sufficed.
+    /// found, or carried from the run's base size, or mirrored from the
+    /// piece's mirror pair ([`FoundDart::origin`]); at most
+    /// [`AutoDartOptions::max_darts`]; empty when the declared darts sufficed.
     pub found_darts: Vec<FoundDart>,
 }
 
@@ -252,7 +254,8 @@ pub fn pattern(
 /// base size decided them: the declared darts it leaves out are left out,
 /// its found darts are slit along the same vertex chains, and nothing is
 /// searched), else decided on this mesh: every declared dart that opens is
-/// kept, and, with [`AutoDartOptions::enabled`], darts are searched where a
+/// kept (one that does not goes with its mirror image, `…_left` ↔
+/// `…_right`), and, with [`AutoDartOptions::enabled`], darts are searched where a
 /// piece still strains. The result's [`GarmentPattern::dart_plan`] is the
 /// plan used.
 ///
@@ -281,13 +284,20 @@ pub fn pattern_with_plan(
         let (mut g, darts) = pattern_once(&tt, positions, triangles, levels, size, opts, Search::None)?;
         // the worst dart that does not open (or opens inverted) goes, and the pattern is made again
         let worst = darts
-            .into_iter()
+            .iter()
             .filter(|(_, opening, crossing)| *crossing || *opening < opts.min_dart_intake_mm)
-            .min_by(|a, b| a.1.total_cmp(&b.1));
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .cloned();
         match worst {
             Some((name, opening, _)) => {
-                tt.darts.retain(|d| d.name != name);
+                // and its mirror image (`…_left` ↔ `…_right`): a pattern maker keeps darts in pairs
+                let mirror = mirror_name(&name).filter(|m| *m != name && tt.darts.iter().any(|d| d.name == *m));
+                tt.darts.retain(|d| d.name != name && Some(&d.name) != mirror.as_ref());
                 left_out.push((name, opening));
+                if let Some(m) = mirror {
+                    let o = darts.iter().find(|d| d.0 == m).map_or(0.0, |d| d.1);
+                    left_out.push((m, o));
+                }
             }
             None => {
                 // the declared darts are settled: darts where a piece still strains
@@ -300,6 +310,18 @@ pub fn pattern_with_plan(
                 return Ok(g);
             }
         }
+    }
+}
+
+/// The name of the mirror image of a left or right dart (`dart_front_left`
+/// ↔ `dart_front_right`); `None` for a name with neither.
+fn mirror_name(name: &str) -> Option<String> {
+    if name.contains("left") {
+        Some(name.replacen("left", "right", 1))
+    } else if name.contains("right") {
+        Some(name.replacen("right", "left", 1))
+    } else {
+        None
     }
 }
 
