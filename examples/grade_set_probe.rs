@@ -40,10 +40,24 @@ fn main() {
     let base_row = chart.rows.iter().position(|r| r.size == base).unwrap();
     let order: Vec<usize> = std::iter::once(base_row).chain((0..chart.rows.len()).filter(|&i| i != base_row)).collect();
     let mut plan = None;
+    // GRADED=1: every size from the base size's phase-1 parameters (frozen), sized by phase 2 alone
+    let graded = std::env::var("GRADED").is_ok();
+    let mut base_params: Option<grade3d::mannequin::model::MannequinParams> = None;
     let mut by_row: BTreeMap<usize, Vec<PatternPiece>> = BTreeMap::new();
     for i in order {
         let row = &chart.rows[i];
-        let fitted = fit_size(model, row, &fit_opts).unwrap();
+        let opts = match (&base_params, graded) {
+            (Some(p), true) => FitOptions { base: p.clone(), prior_weight_mm: 1e9, ..fit_opts.clone() },
+            _ => fit_opts.clone(),
+        };
+        let fitted = fit_size(model, row, &opts).unwrap();
+        if base_params.is_none() {
+            base_params = Some(fitted.params.clone());
+        }
+        if std::env::var("RESIDUALS").is_ok() {
+            let worst = fitted.residuals.values().map(|r| r.error_mm().abs()).fold(0.0, f64::max);
+            println!("{} worst residual {worst:.2} mm", row.size);
+        }
         let body = &fitted.body;
         if std::env::var("PARAMS").is_ok() {
             println!("{} params {:?}", row.size, serde_json::to_string(&fitted.params).unwrap());
