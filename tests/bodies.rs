@@ -276,6 +276,21 @@ fn front_landmark_off_the_centre_line_is_refused() {
 }
 
 #[test]
+fn front_landmark_near_the_midline_limit_is_graded_with_a_warning() {
+    let (_, mesh, mut lm) = fixture_bodies().swap_remove(1);
+    let clean = derive(mesh.clone(), &lm);
+    assert!(clean.warnings.is_empty(), "{:?}", clean.warnings);
+    // 20 mm to the body's left of the centre front line: above the 15 mm warning, below the 30 mm refusal
+    let p = lm.points[&PointId::WaistFront];
+    lm.points.insert(PointId::WaistFront, p + DVec3::new(0.02, 0.0, 0.0));
+    let body = derive_features(mesh, &lm, &DeriveOptions::default()).expect("graded");
+    let w: Vec<_> = body.warnings.iter().filter(|w| w.point == PointId::WaistFront).collect();
+    assert_eq!(w.len(), 1, "{:?}", body.warnings);
+    assert_eq!(w[0].code, "landmark-near-midline-limit");
+    assert!(w[0].detail.contains("waist_front") && w[0].detail.contains("30 mm"), "{}", w[0].detail);
+}
+
+#[test]
 fn thigh_landmark_above_the_crotch_is_refused() {
     let (_, mesh, mut lm) = fixture_bodies().swap_remove(1);
     // the left thigh point moved up the side of the leg to 20 mm above the crotch

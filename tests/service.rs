@@ -459,6 +459,8 @@ fn scan_flow_multipart() {
     let j = r.json();
     assert_eq!(j["flow"], "scan");
     assert!(j["expires_in_s"].as_u64().unwrap() > 0);
+    // the fixture's landmarks are clean: the report lists no warning (issue #13: warnings, not refusals)
+    assert_eq!(j["report"]["bodies"][0]["warnings"], serde_json::json!([]), "{}", j["report"]["bodies"][0]);
     let garment = &j["report"]["bodies"][0]["garments"][0];
     assert_eq!(garment["fit"]["vertices_inside_body"], 0);
     let eases = garment["fit"]["girth_ease"].as_array().unwrap();

@@ -15,6 +15,11 @@
 //!    landmarks lie in their order up the body, ankle to knee to thigh to
 //!    crotch, crotch to hip to waist to bust to underarm to shoulder
 //!    ([`FeatureError::LandmarkHeight`]: a girth off its landmark's height).
+//!    Landmarks that are plausible but near a limit (a midline point more
+//!    than [`DeriveOptions::warn_midline_offset_mm`] off centre, a landmark
+//!    more than [`DeriveOptions::warn_landmark_offset_mm`] from the surface,
+//!    a frame flatter than [`DeriveOptions::warn_frame_triple`]) are
+//!    graded, with a [`FeatureWarning`] in the report.
 //! 3. **Curves** (unless given as polylines): each curve by its rule in
 //!    [`vocab::CURVES`] — a *section* is a plane section of the mesh
 //!    ([`crate::geom::slice`]), the loop chosen as the one enclosing the
@@ -113,6 +118,18 @@ pub struct DeriveOptions {
     /// Largest accepted girth as a share of the stature. Default 1.3 (the
     /// heaviest bodies of the hm08 model reach 1.1 at the hip).
     pub max_girth_to_stature: f64,
+    /// A midline landmark farther than this from the mid-sagittal plane
+    /// (but within [`Self::max_midline_offset_mm`]) is graded with a
+    /// warning, mm. Default 15 (the garment is skewed by about as much).
+    pub warn_midline_offset_mm: f64,
+    /// A landmark farther than this from the surface (but within
+    /// [`Self::max_landmark_offset_mm`]) is snapped with a warning, mm.
+    /// Default 10.
+    pub warn_landmark_offset_mm: f64,
+    /// A frame with `|t(f1)·(t(f2)×n)|` below this (but at least
+    /// [`Self::min_frame_triple`]) is used with a warning: Eq. (1) offsets
+    /// along a nearly flat frame swing far for small changes. Default 0.2.
+    pub warn_frame_triple: f64,
 }
 
 impl Default for DeriveOptions {
@@ -132,8 +149,24 @@ impl Default for DeriveOptions {
             max_midline_offset_mm: 30.0,
             max_armscye_to_chest: 0.75,
             max_girth_to_stature: 1.3,
+            warn_midline_offset_mm: 15.0,
+            warn_landmark_offset_mm: 10.0,
+            warn_frame_triple: 0.2,
         }
     }
+}
+
+/// Something derivation accepted but a person should look at: the body is
+/// graded, and the report lists it (issue #13, item 3).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FeatureWarning {
+    /// Kind: `landmark-near-midline-limit`, `landmark-far-from-surface`,
+    /// `frame-nearly-degenerate`.
+    pub code: String,
+    /// The landmark or feature point.
+    pub point: PointId,
+    /// What was measured, with the warning and refusal thresholds.
+    pub detail: String,
 }
 
 /// Why a body could not be turned into a feature human model.
@@ -291,6 +324,7 @@ pub fn derive_features(
         return Err(FeatureError::MissingLandmarks { missing });
     }
     let mut snapped: BTreeMap<PointId, DVec3> = BTreeMap::new();
+    let mut warnings = Vec::new();
     for (&id, &p) in &landmarks.points {
         if !p.is_finite() {
             return Err(FeatureError::NonFiniteLandmark { point: id });
@@ -304,9 +338,20 @@ pub fn derive_features(
                 limit_mm: opts.max_landmark_offset_mm,
             });
         }
+        if mm > opts.warn_landmark_offset_mm {
+            warnings.push(FeatureWarning {
+                code: "landmark-far-from-surface".into(),
+                point: id,
+                detail: format!(
+                    "landmark `{id}` lies {mm:.1} mm from the surface (warned above {} mm, refused above {} mm); \
+                     it was moved onto it",
+                    opts.warn_landmark_offset_mm, opts.max_landmark_offset_mm
+                ),
+            });
+        }
         snapped.insert(id, sp.point);
     }
-    check_midline(&snapped, opts)?;
+    check_midline(&snapped, opts, &mut warnings)?;
     check_heights(&snapped)?;
 
     let mut curves = BTreeMap::new();
@@ -354,9 +399,23 @@ pub fn derive_features(
         if triple.is_nan() || triple.abs() < opts.min_frame_triple {
             return Err(degenerate(triple));
         }
+        if triple.abs() < opts.warn_frame_triple {
+            warnings.push(FeatureWarning {
+                code: "frame-nearly-degenerate".into(),
+                point: def.id,
+                detail: format!(
+                    "the frame at `{}` is nearly flat: |t(f1)·(t(f2)×n)| = {:.3} (warned below {}, refused below {}); \
+                     nodes tied to it may sit off where the template meant",
+                    def.id,
+                    triple.abs(),
+                    opts.warn_frame_triple,
+                    opts.min_frame_triple
+                ),
+            });
+        }
         points.insert(def.id, FeaturePoint { position, frame, crossing_gap: cross.gap });
     }
-    Ok(FeatureBody { mesh, curves, points })
+    Ok(FeatureBody { mesh, curves, points, warnings })
 }
 
 /// Landmarks that lie on the centre front or centre back line.
@@ -387,9 +446,14 @@ const PAIRS: [(PointId, PointId); 5] = [
 /// Plausibility of the midline landmarks: the mid-sagittal plane passes
 /// through the mean midpoint of the left/right pairs given, with the mean
 /// right-to-left direction (made horizontal) as its normal; every midline
-/// landmark given must lie within [`DeriveOptions::max_midline_offset_mm`].
+/// landmark given must lie within [`DeriveOptions::max_midline_offset_mm`];
+/// one beyond [`DeriveOptions::warn_midline_offset_mm`] is a warning.
 /// Without a pair there is nothing to check against.
-fn check_midline(snapped: &BTreeMap<PointId, DVec3>, opts: &DeriveOptions) -> Result<(), FeatureError> {
+fn check_midline(
+    snapped: &BTreeMap<PointId, DVec3>,
+    opts: &DeriveOptions,
+    warnings: &mut Vec<FeatureWarning>,
+) -> Result<(), FeatureError> {
     let pairs: Vec<(DVec3, DVec3)> =
         PAIRS.iter().filter_map(|(l, r)| Some((*snapped.get(l)?, *snapped.get(r)?))).collect();
     if pairs.is_empty() {
@@ -403,6 +467,17 @@ fn check_midline(snapped: &BTreeMap<PointId, DVec3>, opts: &DeriveOptions) -> Re
         let offset_mm = plane.signed_distance(p).abs() * MM_PER_M;
         if offset_mm > opts.max_midline_offset_mm {
             return Err(FeatureError::OffMidline { point: id, offset_mm, limit_mm: opts.max_midline_offset_mm });
+        }
+        if offset_mm > opts.warn_midline_offset_mm {
+            warnings.push(FeatureWarning {
+                code: "landmark-near-midline-limit".into(),
+                point: id,
+                detail: format!(
+                    "landmark `{id}` is {offset_mm:.1} mm from the mid-sagittal plane of the left/right landmarks \
+                     (warned above {} mm, refused above {} mm): the garment is skewed by about as much",
+                    opts.warn_midline_offset_mm, opts.max_midline_offset_mm
+                ),
+            });
         }
     }
     Ok(())

@@ -86,6 +86,9 @@ pub struct FeatureBody {
     pub curves: BTreeMap<CurveId, FeatureCurve>,
     /// Feature points by ID.
     pub points: BTreeMap<PointId, FeaturePoint>,
+    /// What derivation accepted but a person should look at (issue #13,
+    /// item 3: a warning where grading can still go on), in the report.
+    pub warnings: Vec<super::derive::FeatureWarning>,
 }
 
 impl FeatureBody {
@@ -115,7 +118,7 @@ impl FeatureBody {
                 (*k, FeaturePoint { position: map(p.position), frame, crossing_gap: p.crossing_gap })
             })
             .collect();
-        Ok(Self { mesh, curves, points })
+        Ok(Self { mesh, curves, points, warnings: self.warnings.clone() })
     }
 }
 

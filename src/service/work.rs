@@ -515,14 +515,15 @@ pub fn size_chart(
                 )
             })
             .collect();
-        done_rows[i] = Some((graded, serde_json::json!(residuals), out));
+        let mannequin = serde_json::json!({"residuals": residuals, "warnings": fitted.body.warnings});
+        done_rows[i] = Some((graded, mannequin, out));
     }
     // reported in the chart's order
     for (row, done) in chart.rows.iter().zip(done_rows) {
-        let Some((graded, residuals, out)) = done else { continue };
+        let Some((graded, mannequin, out)) = done else { continue };
         artefacts.extend(out);
         let garments = collect(graded, &row.size, &mut per_template);
-        sizes.push(serde_json::json!({"size": row.size, "mannequin": {"residuals": residuals}, "garments": garments}));
+        sizes.push(serde_json::json!({"size": row.size, "mannequin": mannequin, "garments": garments}));
     }
     progress(stage::EXPORT, total, total);
     graded_nests(templates, &per_template, &base, &mut timer, &mut artefacts)?;
@@ -576,13 +577,20 @@ pub fn bodies(
         }
         let measurements: BTreeMap<&str, f64> =
             measure(&body, &MeasureOptions::default()).iter().map(|(id, v)| (id.as_str(), *v)).collect();
-        done_bodies[i] = Some((graded, serde_json::json!(measurements), out));
+        // what derivation accepted but a person should look at (issue #13: warnings, not refusals)
+        let about = serde_json::json!({"measurements_m": measurements, "warnings": body.warnings});
+        done_bodies[i] = Some((graded, about, out));
     }
     for (input, done) in inputs.iter().zip(done_bodies) {
         let Some((graded, measurements, out)) = done else { continue };
         artefacts.extend(out);
         let garments = collect(graded, input.name, &mut per_template);
-        reports.push(serde_json::json!({"body": input.name, "measurements_m": measurements, "garments": garments}));
+        reports.push(serde_json::json!({
+            "body": input.name,
+            "measurements_m": measurements["measurements_m"],
+            "warnings": measurements["warnings"],
+            "garments": garments
+        }));
     }
     if inputs.len() > 1 {
         let base = match base {
