@@ -727,10 +727,12 @@ fn mirror_darts(
         let mut chain = Vec::with_capacity(legs.a.len());
         for &l in &legs.a {
             let q = reflect(*positions.get(*first.global.get(l as usize)? as usize)?);
-            let (g, dist) = local
-                .keys()
+            // in the panel's own vertex order, ties to the lower id: deterministic
+            let (g, dist) = second
+                .global
+                .iter()
                 .map(|&g| (g, positions.get(g as usize).map_or(f64::INFINITY, |p| p.distance(q))))
-                .min_by(|a, b| a.1.total_cmp(&b.1))?;
+                .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)))?;
             if dist > tol {
                 return None;
             }
