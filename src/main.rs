@@ -327,12 +327,7 @@ fn grade_offline(args: &GradeArgs) -> Result<(), Box<dyn std::error::Error>> {
             Some(other) => return Err(bad(format!("--figure: `{other}` is not curvy or straight"))),
         }
         let t = text(chart_path)?;
-        let chart = if t.trim_start().starts_with('{') {
-            size_chart::parse_json(&t, &opts)
-        } else {
-            size_chart::parse_csv(&t, &opts)
-        }
-        .map_err(|e| bad(format!("{}: {e}", chart_path.display())))?;
+        let chart = size_chart::parse_text(&t, &opts).map_err(|e| bad(format!("{}: {e}", chart_path.display())))?;
         work::size_chart(&ctx, &templates, &chart, args.base_size.as_deref(), &progress)
             .map_err(|e| fail(e, chart_path))?
     } else {
@@ -377,11 +372,7 @@ fn fit_chart(path: &std::path::Path, figure: &str) -> Result<(), Box<dyn std::er
     };
     let text = std::fs::read_to_string(path)?;
     let opts = size_chart::SizeChartOptions { figure, ..Default::default() };
-    let chart = if text.trim_start().starts_with('{') {
-        size_chart::parse_json(&text, &opts)?
-    } else {
-        size_chart::parse_csv(&text, &opts)?
-    };
+    let chart = size_chart::parse_text(&text, &opts)?;
     let model = BodyModel::embedded()?;
     let mut out = std::io::stdout().lock();
     let fit_opts = fit::FitOptions::for_sex(chart.sex);

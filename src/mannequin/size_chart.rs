@@ -404,6 +404,19 @@ fn parse_sex(text: &str) -> Result<Sex, SizeChartError> {
     }
 }
 
+/// A size chart as text, JSON when it opens with `{`, else CSV
+/// ([`parse_json`], [`parse_csv`]): what a file holds.
+///
+/// # Errors
+/// As [`parse_json`] or [`parse_csv`].
+pub fn parse_text(text: &str, opts: &SizeChartOptions) -> Result<SizeChart, SizeChartError> {
+    if text.trim_start().starts_with('{') {
+        parse_json(text, opts)
+    } else {
+        parse_csv(text, opts)
+    }
+}
+
 /// Parses a CSV size chart.
 pub fn parse_csv(text: &str, opts: &SizeChartOptions) -> Result<SizeChart, SizeChartError> {
     let mut rdr = csv::ReaderBuilder::new().comment(Some(b'#')).trim(csv::Trim::All).from_reader(text.as_bytes());

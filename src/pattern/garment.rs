@@ -91,9 +91,10 @@ pub struct PatternOptions {
     /// and a graded nest of them does not stack).
     pub search_every_size: bool,
     /// How far a mirrored dart's vertex may lie from the mirror image of
-    /// its pair's ([`Template::mirror_pairs`]), mm. Default 5 (a garment
-    /// on a symmetric mannequin mirrors to well under a millimetre; a scan's
-    /// halves differ by centimetres, and each side is searched on its own).
+    /// its pair's ([`Template::mirror_pairs`]), mm. Default 10 (about a
+    /// refined edge: the garment on a symmetric mannequin mirrors within
+    /// 5–6 mm of a vertex after the depth-map collision; a scan's halves
+    /// differ by centimetres, and each side is searched on its own).
     pub mirror_tolerance_mm: f64,
 }
 
@@ -338,10 +339,6 @@ enum Search<'a> {
 
 /// Slits the planned darts of `panel` (global vertex chains mapped to its local ids).
 fn carry_darts(panel: &mut Panel, planned: &[PlannedDart]) -> Result<Vec<FoundDart>, PatternError> {
-    let mut local: std::collections::HashMap<u32, u32> = std::collections::HashMap::with_capacity(panel.global.len());
-    for (l, &g) in panel.global.iter().enumerate() {
-        local.entry(g).or_insert(l as u32);
-    }
     let mut found = Vec::new();
     let name = panel.name.clone();
     for d in planned.iter().filter(|d| d.panel == name) {
@@ -349,7 +346,7 @@ fn carry_darts(panel: &mut Panel, planned: &[PlannedDart]) -> Result<Vec<FoundDa
         let chain: Vec<u32> = d
             .chain
             .iter()
-            .map(|g| local.get(g).copied().ok_or_else(|| err(format!("vertex {g} is not in the panel"))))
+            .map(|&g| panel.local(g).ok_or_else(|| err(format!("vertex {g} is not in the panel"))))
             .collect::<Result<_, _>>()?;
         panel.add_dart(&d.name, &chain).map_err(err)?;
         let pts: Vec<DVec3> = chain.iter().map(|&l| panel.positions[l as usize]).collect();
@@ -518,20 +515,20 @@ fn pattern_once(
     let mut cap = vec![opts.auto_darts.max_darts; cut_panels.len()];
     // per panel: the cap searched with, the darted panel, its darts and its search flattening
     let mut searched: Vec<Option<(usize, Searched)>> = vec![None; cut_panels.len()];
+    // the second panel of a mirror pair takes the first's darts, mirrored (issue #14)
+    let second_of: Vec<Option<usize>> = cut_panels
+        .iter()
+        .map(|p| {
+            let [a, _] = t.mirror_pairs.iter().find(|[_, b]| *b == p.name)?;
+            cut_panels.iter().position(|q| q.name == *a)
+        })
+        .collect();
     loop {
         let mut panels = cut_panels.clone();
         let mut found_darts = vec![Vec::new(); panels.len()];
         // with negotiated seams, the search's last flattening is the free one the negotiation needs
         let mut free: Vec<Option<Trial>> = vec![None; panels.len()];
         if find_darts {
-            // the second panel of a mirror pair takes the first's darts, mirrored (issue #14)
-            let second_of: Vec<Option<usize>> = panels
-                .iter()
-                .map(|p| {
-                    let [a, _] = t.mirror_pairs.iter().find(|[_, b]| *b == p.name)?;
-                    panels.iter().position(|q| q.name == *a)
-                })
-                .collect();
             for (i, panel) in panels.iter_mut().enumerate() {
                 if second_of[i].is_some() {
                     continue;
@@ -601,10 +598,8 @@ fn pattern_once(
             {
                 cap[i] = found_darts.len() - 1;
                 // a mirrored panel's darts are its pair's: the pair gives one up
-                if let Some([a, _]) = t.mirror_pairs.iter().find(|[_, b]| *b == panel.name) {
-                    if let Some(j) = cut_panels.iter().position(|q| q.name == *a) {
-                        cap[j] = cap[j].min(cap[i]);
-                    }
+                if let Some(j) = second_of[i] {
+                    cap[j] = cap[j].min(cap[i]);
                 }
                 refused = true;
             }
@@ -684,7 +679,7 @@ fn mirror_plane(t: &Template, positions: &[DVec3]) -> Option<(DVec3, f64)> {
         if !name.contains("left") || unique(name) != Some(i) {
             continue;
         }
-        if let Some(j) = unique(&name.replace("left", "right")) {
+        if let Some(j) = mirror_name(name).and_then(|m| unique(&m)) {
             pairs.push((*positions.get(i)?, *positions.get(j)?));
         }
     }
@@ -709,10 +704,6 @@ fn mirror_darts(
 ) -> Option<Vec<FoundDart>> {
     let reflect = |p: DVec3| p - 2.0 * (n.dot(p) - d) * n;
     let tol = opts.mirror_tolerance_mm * 1e-3;
-    let mut local: std::collections::HashMap<u32, u32> = std::collections::HashMap::new();
-    for (l, &g) in second.global.iter().enumerate() {
-        local.entry(g).or_insert(l as u32);
-    }
     let mut edges = std::collections::HashSet::new();
     for f in &second.triangles {
         for k in 0..3 {
@@ -727,16 +718,15 @@ fn mirror_darts(
         let mut chain = Vec::with_capacity(legs.a.len());
         for &l in &legs.a {
             let q = reflect(*positions.get(*first.global.get(l as usize)? as usize)?);
-            // in the panel's own vertex order, ties to the lower id: deterministic
-            let (g, dist) = second
-                .global
+            // over the panel's vertices (not their dart copies), ties to the lower id: deterministic
+            let (g, dist) = second.global[..second.unique]
                 .iter()
                 .map(|&g| (g, positions.get(g as usize).map_or(f64::INFINITY, |p| p.distance(q))))
                 .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)))?;
             if dist > tol {
                 return None;
             }
-            chain.push(local[&g]);
+            chain.push(second.local(g)?);
         }
         if chain.windows(2).any(|w| !edges.contains(&(w[0].min(w[1]), w[0].max(w[1])))) {
             return None;

@@ -22,6 +22,9 @@
 
 use glam::DVec2;
 
+use super::assemble::signed_area;
+use crate::geom::polyline::{point_in_polygon, point_segment};
+
 use super::piece::{GradePointKind, GradeRule, GradeRuleTable, PatternPiece, PieceGradeRules};
 
 /// Why grading across sizes failed.
@@ -159,7 +162,7 @@ pub fn nest_steps(nest: &[(String, Vec<PatternPiece>)]) -> Vec<NestStep> {
                 }
             }
             let outside =
-                a.iter().filter(|&&p| winding(b, p) == 0 && distance_to_polygon(b, p) > NEST_TOUCH_MM).count();
+                a.iter().filter(|&&p| !point_in_polygon(b, p) && distance_to_polygon(b, p) > NEST_TOUCH_MM).count();
             out.push(NestStep {
                 piece: piece.clone(),
                 smaller: w[0].size.clone(),
@@ -180,32 +183,12 @@ fn properly_cross(p: DVec2, q: DVec2, r: DVec2, s: DVec2) -> bool {
     d1 * d2 < 0.0 && d3 * d4 < 0.0
 }
 
-/// Winding number of closed polygon `poly` around `p`.
-fn winding(poly: &[DVec2], p: DVec2) -> i32 {
-    let mut w = 0;
-    for i in 0..poly.len() {
-        let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
-        let side = (b - a).perp_dot(p - a);
-        if a.y <= p.y {
-            if b.y > p.y && side > 0.0 {
-                w += 1;
-            }
-        } else if b.y <= p.y && side < 0.0 {
-            w -= 1;
-        }
-    }
-    w
-}
-
 /// Distance from `p` to the closed polygon `poly`'s outline.
 fn distance_to_polygon(poly: &[DVec2], p: DVec2) -> f64 {
     (0..poly.len())
         .map(|i| {
             let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
-            let ab = b - a;
-            let t =
-                if ab.length_squared() > 0.0 { ((p - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0) } else { 0.0 };
-            p.distance(a + ab * t)
+            p.distance(a.lerp(b, point_segment(p.extend(0.0), a.extend(0.0), b.extend(0.0))))
         })
         .fold(f64::INFINITY, f64::min)
 }
@@ -289,8 +272,7 @@ pub struct MirrorDifference {
 /// [`MirrorDifference`] of `a` and `b`.
 pub fn mirror_difference(a: &PatternPiece, b: &PatternPiece) -> MirrorDifference {
     let mirrored: Vec<DVec2> = b.sew_line.iter().map(|p| DVec2::new(-p.x, p.y)).collect();
-    let area =
-        |poly: &[DVec2]| 0.5 * (0..poly.len()).map(|i| poly[i].perp_dot(poly[(i + 1) % poly.len()])).sum::<f64>().abs();
+    let area = |poly: &[DVec2]| signed_area(poly).abs();
     let extent = |poly: &[DVec2], f: fn(&DVec2) -> f64| {
         let v = poly.iter().map(f);
         v.clone().fold(f64::MIN, f64::max) - v.fold(f64::MAX, f64::min)

@@ -260,6 +260,17 @@ pub fn read_body(input: &BodyInput<'_>, opts: &WorkOptions) -> Result<FeatureBod
     derive_features(mesh, &lm, &DeriveOptions::default()).map_err(|source| WorkError::Feature { body: name, source })
 }
 
+/// Indices `0..total`, `base` first, then the others in order (a run grades
+/// its base size first: its dart plan is carried to the others).
+fn base_first(total: usize, base: usize) -> impl Iterator<Item = usize> {
+    std::iter::once(base).chain((0..total).filter(move |&i| i != base))
+}
+
+/// The dart plan of each template's grade, in template order (a run's base size).
+fn plans_of(graded: &[(String, Graded, serde_json::Value)]) -> Vec<DartPlan> {
+    graded.iter().map(|(_, g, _)| g.pattern.dart_plan.clone()).collect()
+}
+
 /// One graded body of a run, kept until the run is reported in request
 /// order: its grades (template name, grade, fit figures), its report part
 /// (residuals or measurements) and its artefacts.
@@ -489,7 +500,7 @@ pub fn size_chart(
     let fit_opts = FitOptions::for_sex(chart.sex);
     // the base size first: its dart plan is carried to every other size (one plan per run)
     let base_row = chart.rows.iter().position(|r| r.size == base).unwrap_or(0);
-    let order = std::iter::once(base_row).chain((0..total).filter(|&i| i != base_row));
+    let order = base_first(total, base_row);
     let mut done_rows: Vec<Option<Done>> = vec![None; total];
     let mut plans: Option<Vec<DartPlan>> = None;
     for (done, i) in order.enumerate() {
@@ -503,7 +514,7 @@ pub fn size_chart(
         let mut out = Vec::new();
         let graded = grade_body(ctx, templates, &fitted.body, &row.size, true, plans.as_deref(), &mut timer, &mut out)?;
         if plans.is_none() {
-            plans = Some(graded.iter().map(|(_, g, _)| g.pattern.dart_plan.clone()).collect());
+            plans = Some(plans_of(&graded));
         }
         let residuals: BTreeMap<&str, serde_json::Value> = fitted
             .residuals
@@ -560,7 +571,7 @@ pub fn bodies(
     let total = inputs.len();
     // the base body first (several bodies: a run): its dart plan is carried to the others
     let base_at = base.and_then(|b| inputs.iter().position(|i| i.name == b)).unwrap_or(0);
-    let order = std::iter::once(base_at).chain((0..total).filter(|&i| i != base_at));
+    let order = base_first(total, base_at);
     let mut done_bodies: Vec<Option<Done>> = vec![None; total];
     let mut plans: Option<Vec<DartPlan>> = None;
     for (done, i) in order.enumerate() {
@@ -573,7 +584,7 @@ pub fn bodies(
         let mut out = Vec::new();
         let graded = grade_body(ctx, templates, &body, input.name, false, plans.as_deref(), &mut timer, &mut out)?;
         if plans.is_none() {
-            plans = Some(graded.iter().map(|(_, g, _)| g.pattern.dart_plan.clone()).collect());
+            plans = Some(plans_of(&graded));
         }
         let measurements: BTreeMap<&str, f64> =
             measure(&body, &MeasureOptions::default()).iter().map(|(id, v)| (id.as_str(), *v)).collect();
@@ -582,15 +593,13 @@ pub fn bodies(
         done_bodies[i] = Some((graded, about, out));
     }
     for (input, done) in inputs.iter().zip(done_bodies) {
-        let Some((graded, measurements, out)) = done else { continue };
+        let Some((graded, about, out)) = done else { continue };
         artefacts.extend(out);
         let garments = collect(graded, input.name, &mut per_template);
-        reports.push(serde_json::json!({
-            "body": input.name,
-            "measurements_m": measurements["measurements_m"],
-            "warnings": measurements["warnings"],
-            "garments": garments
-        }));
+        let mut entry = about;
+        entry["body"] = serde_json::json!(input.name);
+        entry["garments"] = serde_json::json!(garments);
+        reports.push(entry);
     }
     if inputs.len() > 1 {
         let base = match base {
