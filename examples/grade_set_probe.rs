@@ -12,7 +12,7 @@ use grade3d::body::measure::MeasurementId;
 use grade3d::collide::cache::Obstacle;
 use grade3d::collide::render::{GpuContext, RenderOptions};
 use grade3d::geom::winding::{WindingOptions, WindingTree};
-use grade3d::mannequin::fit::{fit_size, FitOptions};
+use grade3d::mannequin::fit::{fit_graded, fit_size, FitOptions};
 use grade3d::mannequin::model::BodyModel;
 use grade3d::mannequin::size_chart::{parse_csv, SizeChartOptions};
 use grade3d::pattern::grade::{grade_rules, nest_steps, nests, step_regularity};
@@ -40,23 +40,22 @@ fn main() {
     let base_row = chart.rows.iter().position(|r| r.size == base).unwrap();
     let order: Vec<usize> = std::iter::once(base_row).chain((0..chart.rows.len()).filter(|&i| i != base_row)).collect();
     let mut plan = None;
-    // GRADED=1: every size from the base size's phase-1 parameters (frozen), sized by phase 2 alone
-    let graded = std::env::var("GRADED").is_ok();
-    let mut base_params: Option<grade3d::mannequin::model::MannequinParams> = None;
+    // INDEPENDENT=1: every size fitted on its own (phases 1 and 2), not graded from the base size
+    let fit_opts = FitOptions { independent_sizes: std::env::var("INDEPENDENT").is_ok(), ..fit_opts };
+    let mut base_fit: Option<grade3d::mannequin::fit::FittedMannequin> = None;
     let mut by_row: BTreeMap<usize, Vec<PatternPiece>> = BTreeMap::new();
     for i in order {
         let row = &chart.rows[i];
-        let opts = match (&base_params, graded) {
-            (Some(p), true) => FitOptions { base: p.clone(), prior_weight_mm: 1e9, ..fit_opts.clone() },
-            _ => fit_opts.clone(),
+        let fitted = match &base_fit {
+            Some(b) if !fit_opts.independent_sizes => fit_graded(model, b, row, &fit_opts).unwrap(),
+            _ => fit_size(model, row, &fit_opts).unwrap(),
         };
-        let fitted = fit_size(model, row, &opts).unwrap();
-        if base_params.is_none() {
-            base_params = Some(fitted.params.clone());
+        if base_fit.is_none() {
+            base_fit = Some(fitted.clone());
         }
         if std::env::var("RESIDUALS").is_ok() {
             let worst = fitted.residuals.values().map(|r| r.error_mm().abs()).fold(0.0, f64::max);
-            println!("{} worst residual {worst:.2} mm", row.size);
+            println!("{} worst residual {worst:.2} mm ({} rounds)", row.size, fitted.scaling_rounds);
         }
         let body = &fitted.body;
         if std::env::var("PARAMS").is_ok() {
@@ -66,6 +65,27 @@ fn main() {
         let maps = gpu.render(&body.mesh, &RenderOptions::default()).unwrap();
         let obstacle = Obstacle { maps, tree: WindingTree::new(&body.mesh, &WindingOptions::default()) };
         let g = grade_with_plan(&t, body, Some(&obstacle), &row.size, &GradeOptions::default(), plan.as_ref()).unwrap();
+        // POINTS=a,b: body feature points and the garment's nodes on them (cut positions, mm)
+        if let Ok(names) = std::env::var("POINTS") {
+            for name in names.split(',') {
+                let bp = body.points.iter().find(|(id, _)| id.as_str() == name).map(|(_, p)| p.position * 1e3);
+                let nodes: Vec<String> = t
+                    .nodes
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, n)| n.point.as_str() == name)
+                    .map(|(i, _)| {
+                        let q = g.cut_positions[i] * 1e3;
+                        format!("[{:.1},{:.1},{:.1}]", q.x, q.y, q.z)
+                    })
+                    .collect();
+                println!("  {} {name}: body {:?} garment {}", row.size, bp.map(|p| [p.x.round(), p.y.round(), p.z.round()]), nodes.join(" "));
+                if let Some((_, fp)) = body.points.iter().find(|(id, _)| id.as_str() == name) {
+                    let f = &fp.frame;
+                    println!("     frame t1 {:.3?} t2 {:.3?} n {:.3?}", f.t1.to_array(), f.t2.to_array(), f.n.to_array());
+                }
+            }
+        }
         let line: Vec<String> = g
             .pattern
             .reports
@@ -93,6 +113,34 @@ fn main() {
     }
     for st in nest_steps(&nest) {
         println!("  {} {}→{}: crossings {}, outside {}", st.piece, st.smaller, st.larger, st.crossings, st.outside);
+    }
+    // NEST_DETAIL=1: where the outlines of consecutive sizes cross, by the nearest grade point
+    if std::env::var("NEST_DETAIL").is_ok() {
+        for (piece, all) in &nest {
+            for w in all.windows(2) {
+                let (a, b) = (&w[0], &w[1]);
+                let n = a.sew_line.len();
+                let m = b.sew_line.len();
+                let mut at = Vec::new();
+                for i in 0..n {
+                    let (p, q) = (a.sew_line[i], a.sew_line[(i + 1) % n]);
+                    for j in 0..m {
+                        let (r, s) = (b.sew_line[j], b.sew_line[(j + 1) % m]);
+                        let o = |x: glam::DVec2, y: glam::DVec2, z: glam::DVec2| (y - x).perp_dot(z - x);
+                        if o(r, s, p) * o(r, s, q) < 0.0 && o(p, q, r) * o(p, q, s) < 0.0 {
+                            let g = a
+                                .grade_points
+                                .iter()
+                                .min_by(|u, v| u.at.distance(p).total_cmp(&v.at.distance(p)))
+                                .map(|g| format!("{} ({:.0} mm)", g.label, g.at.distance(p)))
+                                .unwrap_or_default();
+                            at.push(format!("[{:.0},{:.0}] near {g}", p.x, p.y));
+                        }
+                    }
+                }
+                println!("    {piece} {}→{}: {}", a.size, b.size, at.join("; "));
+            }
+        }
     }
     let rules = grade_rules(&t.name, &sizes, &base).unwrap();
     let girths: Vec<f64> = chart.rows.iter().map(|r| r.targets.get(&governing).copied().unwrap_or(0.0) * 1e3).collect();

@@ -96,7 +96,9 @@ pub struct DeriveOptions {
     /// How far below the armpit landmarks the chest girth is taken, mm. Default 10.
     pub chest_below_armpit_mm: f64,
     /// Half the width of an ankle, used to aim the leg sagittal line at the
-    /// middle of the ankle from its outer side point, mm. Default 35.
+    /// middle of the ankle from its outer side point where the body has no
+    /// horizontal section there (the line is aimed at the middle of that
+    /// section otherwise), mm. Default 35.
     pub ankle_half_width_mm: f64,
     /// Vertices closer than this are merged before slicing (scans often
     /// arrive split along UV or normal seams), mm. Default 0.01.
@@ -606,7 +608,13 @@ fn mean(points: &[DVec3]) -> DVec3 {
     points.iter().copied().sum::<DVec3>() / points.len().max(1) as f64
 }
 
-fn section_plane(curve: CurveId, rule: PlaneRule, pts: &[DVec3], opts: &DeriveOptions) -> Result<Plane, FeatureError> {
+fn section_plane(
+    mesh: &TriMesh,
+    curve: CurveId,
+    rule: PlaneRule,
+    pts: &[DVec3],
+    opts: &DeriveOptions,
+) -> Result<Plane, FeatureError> {
     let c = mean(pts);
     let horizontal = |y: f64| Plane { normal: DVec3::Y, offset: y };
     let plane = match rule {
@@ -643,12 +651,32 @@ fn section_plane(curve: CurveId, rule: PlaneRule, pts: &[DVec3], opts: &DeriveOp
             };
             let thigh_mid = DVec3::new(crotch.x + LEG_MIDDLE_FRACTION * (thigh.x - crotch.x), thigh.y, thigh.z);
             let inward = (crotch.x - ankle.x).signum();
-            let ankle_mid = DVec3::new(ankle.x + inward * opts.ankle_half_width_mm / MM_PER_M, ankle.y, ankle.z);
+            // the middle of the ankle: its horizontal section's x extent (an ankle grows with the
+            // body; a fixed half width would slide the line round the ankle from size to size)
+            let ankle_x = ankle_middle_x(mesh, ankle)
+                .unwrap_or(ankle.x + inward * opts.ankle_half_width_mm / MM_PER_M);
+            let ankle_mid = DVec3::new(ankle_x, ankle.y, ankle.z);
             Plane::from_point_normal(thigh_mid, (ankle_mid - thigh_mid).cross(DVec3::Z))
                 .ok_or_else(|| FeatureError::NoSection { curve, reason: "(thigh and ankle points coincide)".into() })?
         }
     };
     Ok(plane)
+}
+
+/// x of the middle of the leg at the ankle side point `ankle`: the mean of
+/// the x extremes of the horizontal section loop nearest to it; `None`
+/// where no loop passes within a centimetre of the point.
+fn ankle_middle_x(mesh: &TriMesh, ankle: DVec3) -> Option<f64> {
+    const NEAR_M: f64 = 0.01;
+    let loops = slice(mesh, &Plane { normal: DVec3::Y, offset: ankle.y });
+    let near = loops
+        .iter()
+        .filter_map(|s| s.polyline.closest(ankle).map(|c| (c.distance, &s.polyline)))
+        .filter(|(d, _)| *d < NEAR_M)
+        .min_by(|a, b| a.0.total_cmp(&b.0))?
+        .1;
+    let xs = near.points.iter().map(|p| p.x);
+    Some(0.5 * (xs.clone().fold(f64::INFINITY, f64::min) + xs.fold(f64::NEG_INFINITY, f64::max)))
 }
 
 /// For a leg girth, the vertical plane midway between its side point and
@@ -703,7 +731,7 @@ fn curve_by_rule(
     match *rule {
         CurveRule::Section { landmarks, plane, choice, orientation } => {
             let pts: Vec<DVec3> = landmarks.iter().map(|p| snapped[p]).collect();
-            let plane = section_plane(id, plane, &pts, opts)?;
+            let plane = section_plane(mesh, id, plane, &pts, opts)?;
             let loops: Vec<Polyline> =
                 slice(mesh, &plane).into_iter().map(|s| s.polyline).filter(|p| p.points.len() >= 3).collect();
             let centre = plane.project(mean(&pts));

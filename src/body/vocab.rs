@@ -343,8 +343,9 @@ pub enum PlaneRule {
     VerticalAtAngle(f64),
     /// Through the middle of a leg, containing Z: landmarks are the thigh
     /// and ankle side points and the crotch; the plane passes 55 % of the
-    /// way from the crotch to the thigh side point and half an ankle
-    /// width (`ankle_half_width_mm`) inside the ankle side point.
+    /// way from the crotch to the thigh side point and through the middle
+    /// of the ankle's horizontal section at the ankle side point (half an
+    /// ankle width, `ankle_half_width_mm`, inside it where there is none).
     LegSagittal,
 }
 

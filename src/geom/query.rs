@@ -93,10 +93,15 @@ pub fn closest_point(mesh: &TriMesh, p: DVec3) -> SurfacePoint {
     best
 }
 
-/// Area-weighted mean unit normal of the faces within `radius` of `p`
-/// (measured to each face's closest point). Falls back to the normal of
-/// the closest face when no face lies within the radius or the sum
-/// vanishes. `None` only if every face is degenerate there.
+/// Mean unit normal of the faces within `radius` of `p`, each weighted by
+/// its area and by the Epanechnikov kernel `1 − (d/r)²` of the distance `d`
+/// from `p` to its closest point: a face's weight falls to zero as it
+/// leaves the disc, so the normal moves continuously with `p` and with the
+/// body (a face counted whole or not at all made Eq. 1 frames, and the
+/// template nodes placed by them, jump between consecutive sizes of a
+/// grade). Falls back to the normal of the closest face when no face lies
+/// within the radius or the sum vanishes. `None` only if every face is
+/// degenerate there.
 pub fn disc_normal(mesh: &TriMesh, p: DVec3, radius: f64) -> Option<DVec3> {
     let mut sum = DVec3::ZERO;
     for f in 0..mesh.face_count() {
@@ -107,8 +112,9 @@ pub fn disc_normal(mesh: &TriMesh, p: DVec3, radius: f64) -> Option<DVec3> {
         if centre.distance(p) - rad > radius {
             continue;
         }
-        if closest_on_triangle(p, a, b, c).distance(p) <= radius {
-            sum += mesh.face_area_vector(face);
+        let d = closest_on_triangle(p, a, b, c).distance(p);
+        if d <= radius {
+            sum += mesh.face_area_vector(face) * (1.0 - (d / radius).powi(2));
         }
     }
     sum.try_normalize().or_else(|| mesh.face_area_vector(closest_point(mesh, p).face).try_normalize())

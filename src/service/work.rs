@@ -2,8 +2,10 @@
 //! HTTP, no async). The service runs them on its bounded pool; batch jobs
 //! run them on the job worker.
 //!
-//! - [`size_chart`]: one mannequin per size row (seed 003 sizing, see
-//!   [`crate::mannequin::fit`]), every template graded on every size, the
+//! - [`size_chart`]: one mannequin per size row — the base size fitted, every
+//!   other size graded from its body by seed 003 profile scaling
+//!   ([`crate::mannequin::fit::fit_graded`]: one body growing with the
+//!   chart) —, every template graded on every size, the
 //!   graded nest and grade rules per template (issue #5), per-size meshes and
 //!   patterns, and the fit report. The base size is graded first and its
 //!   dart plan carried to every other size (issue #14: one dart plan per
@@ -33,7 +35,7 @@ use crate::geom::mesh::{TriMesh, VertexId};
 use crate::geom::winding::{WindingOptions, WindingTree};
 use crate::io::gltf::{read_mesh, write_glb, GlbAttribute, GltfError, GltfReadOptions};
 use crate::io::landmarks::{parse_landmarks, LandmarkFileError};
-use crate::mannequin::fit::{fit_size, FitError, FitOptions};
+use crate::mannequin::fit::{fit_graded, fit_size, FitError, FitOptions, FittedMannequin};
 use crate::mannequin::model::{BodyModel, MannequinError};
 use crate::mannequin::size_chart::{Sex, SizeChart};
 use crate::pattern::export::{dxf, rul, svg, ExportError};
@@ -503,12 +505,20 @@ pub fn size_chart(
     let order = base_first(total, base_row);
     let mut done_rows: Vec<Option<Done>> = vec![None; total];
     let mut plans: Option<Vec<DartPlan>> = None;
+    // the base size fitted, every other size graded from its body (one body growing with the chart)
+    let mut base_fit: Option<FittedMannequin> = None;
     for (done, i) in order.enumerate() {
         let row = &chart.rows[i];
         progress(stage::FIT, done, total);
         let start = Instant::now();
-        let fitted =
-            fit_size(model, row, &fit_opts).map_err(|source| WorkError::Fit { size: row.size.clone(), source })?;
+        let fitted = match &base_fit {
+            Some(b) if !fit_opts.independent_sizes => fit_graded(model, b, row, &fit_opts),
+            _ => fit_size(model, row, &fit_opts),
+        }
+        .map_err(|source| WorkError::Fit { size: row.size.clone(), source })?;
+        if base_fit.is_none() {
+            base_fit = Some(fitted.clone());
+        }
         timer.add(stage::FIT, start);
         progress(stage::REFINE, done, total);
         let mut out = Vec::new();
