@@ -1,5 +1,6 @@
-//! Development probe (issue #14): a size chart graded as one run — each
-//! row fitted, the base size graded first and its dart plan carried — and
+//! Development probe (issue #14): a size chart graded as one run — the
+//! base size fitted and graded first, every other size graded from its body
+//! (`fit_graded`) with its dart plan carried — and
 //! the grade judged as a set: nest steps (crossings, points outside the
 //! next size), grade-step regularity scaled by the governing girth's chart
 //! steps, and each piece's width per size.
@@ -79,10 +80,20 @@ fn main() {
                         format!("[{:.1},{:.1},{:.1}]", q.x, q.y, q.z)
                     })
                     .collect();
-                println!("  {} {name}: body {:?} garment {}", row.size, bp.map(|p| [p.x.round(), p.y.round(), p.z.round()]), nodes.join(" "));
+                println!(
+                    "  {} {name}: body {:?} garment {}",
+                    row.size,
+                    bp.map(|p| [p.x.round(), p.y.round(), p.z.round()]),
+                    nodes.join(" ")
+                );
                 if let Some((_, fp)) = body.points.iter().find(|(id, _)| id.as_str() == name) {
                     let f = &fp.frame;
-                    println!("     frame t1 {:.3?} t2 {:.3?} n {:.3?}", f.t1.to_array(), f.t2.to_array(), f.n.to_array());
+                    println!(
+                        "     frame t1 {:.3?} t2 {:.3?} n {:.3?}",
+                        f.t1.to_array(),
+                        f.t2.to_array(),
+                        f.n.to_array()
+                    );
                 }
             }
         }
@@ -138,7 +149,24 @@ fn main() {
                         }
                     }
                 }
-                println!("    {piece} {}→{}: {}", a.size, b.size, at.join("; "));
+                // the farthest sew-line point of the smaller size outside the larger one, mm
+                let far = a
+                    .sew_line
+                    .iter()
+                    .filter(|&&p| !grade3d::geom::polyline::point_in_polygon(&b.sew_line, p))
+                    .map(|&p| {
+                        let d = (0..m)
+                            .map(|j| {
+                                let (r, s) = (b.sew_line[j], b.sew_line[(j + 1) % m]);
+                                let t = ((p - r).dot(s - r) / (s - r).length_squared().max(1e-12)).clamp(0.0, 1.0);
+                                p.distance(r.lerp(s, t))
+                            })
+                            .fold(f64::INFINITY, f64::min);
+                        (d, p)
+                    })
+                    .max_by(|x, y| x.0.total_cmp(&y.0));
+                let far = far.map_or(String::new(), |(d, p)| format!("{d:.2} mm at [{:.0},{:.0}]", p.x, p.y));
+                println!("    {piece} {}→{}: farthest outside {far}; {}", a.size, b.size, at.join("; "));
             }
         }
     }

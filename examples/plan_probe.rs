@@ -74,9 +74,8 @@ fn main() {
         if !g.pattern.darts_left_out.is_empty() {
             line += &format!(" out:{:?}", g.pattern.darts_left_out.iter().map(|d| d.0.clone()).collect::<Vec<_>>());
         }
-        for [l, r] in &t.mirror_pairs {
-            let piece = |n: &str| g.pattern.pieces.iter().find(|p| p.name == n).unwrap();
-            let d = grade3d::pattern::grade::mirror_difference(piece(l), piece(r));
+        for pair in &g.pattern.cut_pairs {
+            let ([l, r], d) = (&pair.panels, pair.difference);
             line +=
                 &format!(" | {l}/{r} {:.3}% {:.2} mm", d.area_pct.max(d.width_pct).max(d.height_pct), d.sew_line_mm);
         }

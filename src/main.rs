@@ -24,6 +24,13 @@ enum Command {
         /// ASTM figure type for the waist column (curvy or straight).
         #[arg(long, default_value = "curvy")]
         figure: String,
+        /// The run's base size: fitted, the others graded from its body
+        /// (default: the middle row, as the service's chart flow).
+        #[arg(long)]
+        base_size: Option<String>,
+        /// Fit every size on its own instead of grading the base size's body.
+        #[arg(long)]
+        independent: bool,
     },
     /// Grade a size chart or body scans offline and write exactly the artefacts the
     /// service returns for the same input (patterns, nests, grade rules, meshes, report).
@@ -198,7 +205,9 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
                 );
             }
         }
-        Command::FitChart { chart, figure } => fit_chart(&chart, &figure)?,
+        Command::FitChart { chart, figure, base_size, independent } => {
+            fit_chart(&chart, &figure, base_size.as_deref(), independent)?
+        }
         Command::Grade(args) => grade_offline(&args)?,
         Command::Flatten { panel, json: _, plain } => flatten_panel(&panel, plain)?,
         Command::Panels { dir } => write_panels(&dir)?,
@@ -238,8 +247,10 @@ fn write_fixtures(dir: &std::path::Path) -> Result<(), Box<dyn std::error::Error
     let chart_text = std::fs::read_to_string(dir.join("size-charts/astm-d5585-11-misses-partial.csv"))?;
     let chart = size_chart::parse_csv(&chart_text, &Default::default())?;
     let mut report = serde_json::Map::new();
-    for row in &chart.rows {
-        let fitted = fit::fit_size(model, row, &fit::FitOptions::default())?;
+    // one graded run from the sample size 8 (tests/pattern.rs grades it with base size 8)
+    let base = chart.rows.iter().position(|r| r.size == ASTM_BASE_SIZE).ok_or("the ASTM chart has no size 8")?;
+    let fits = fit::fit_chart(model, &chart.rows, base, &fit::FitOptions::default())?;
+    for (row, fitted) in chart.rows.iter().zip(fits) {
         let lm = landmarks::hm08_landmarks(model, &fitted.body.mesh, &Default::default())?;
         write_body(&astm, &format!("size-{}", row.size), &fitted.body.mesh, &lm)?;
         let residuals: serde_json::Map<String, serde_json::Value> = fitted
@@ -363,7 +374,15 @@ fn grade_offline(args: &GradeArgs) -> Result<(), Box<dyn std::error::Error>> {
     Ok(())
 }
 
-fn fit_chart(path: &std::path::Path, figure: &str) -> Result<(), Box<dyn std::error::Error>> {
+/// The base size of the ASTM fixtures' graded run (`data fixtures`).
+const ASTM_BASE_SIZE: &str = "8";
+
+fn fit_chart(
+    path: &std::path::Path,
+    figure: &str,
+    base: Option<&str>,
+    independent: bool,
+) -> Result<(), Box<dyn std::error::Error>> {
     use grade3d::mannequin::{fit, model::BodyModel, size_chart};
     let figure = match figure {
         "curvy" => size_chart::FigureType::Curvy,
@@ -375,9 +394,13 @@ fn fit_chart(path: &std::path::Path, figure: &str) -> Result<(), Box<dyn std::er
     let chart = size_chart::parse_text(&text, &opts)?;
     let model = BodyModel::embedded()?;
     let mut out = std::io::stdout().lock();
-    let fit_opts = fit::FitOptions::for_sex(chart.sex);
-    for row in &chart.rows {
-        let f = fit::fit_size(model, row, &fit_opts)?;
+    let fit_opts = fit::FitOptions { independent_sizes: independent, ..fit::FitOptions::for_sex(chart.sex) };
+    let base_row = match base {
+        Some(b) => chart.rows.iter().position(|r| r.size == b).ok_or_else(|| format!("no size `{b}` in the chart"))?,
+        None => chart.rows.len() / 2,
+    };
+    let fits = fit::fit_chart(model, &chart.rows, base_row, &fit_opts)?;
+    for (row, f) in chart.rows.iter().zip(&fits) {
         write!(out, "size {:>4}:", row.size)?;
         for (id, r) in &f.residuals {
             write!(out, "  {id} {:.1} cm ({:+.2} mm)", r.target_m * 100.0, r.error_mm())?;

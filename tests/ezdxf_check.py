@@ -7,6 +7,8 @@ For every ``*.dxf`` in DIR (not recursive):
   * read it with ezdxf and run ``doc.audit()``: any audit error or fix fails;
   * every block with a boundary (a POLYLINE or LWPOLYLINE on layer ``1``) must
     also have a sew line (layer ``14``) and a ``Piece Name:`` TEXT on layer 1;
+  * a ``*.accumark.dxf`` (the Gerber AccuMark profile) must be 7-bit ASCII with
+    an empty HEADER section and no TABLES section;
   * if ``X.outlines.json`` sits beside ``X.dxf`` (``{"<piece name>": [[x, y],
     ...]}``, the cut lines in mm), each listed piece's boundary must match it
     point by point within 0.01 mm (the piece name must name exactly one block).
@@ -107,10 +109,37 @@ def check_dxf(path, ezdxf):
             if err > TOLERANCE_MM:
                 problems.append(f"piece {piece!r}: boundary differs by {err:.6f} mm (> {TOLERANCE_MM})")
             compared += 1
+    if path.name.endswith(".accumark.dxf"):
+        problems.extend(check_gerber_profile(path))
     summary = f"{doc.dxfversion}, {len(blocks)} piece blocks, audit {len(auditor.errors)} errors {len(auditor.fixes)} fixes"
     if sidecar.exists():
         summary += f", {compared} outlines compared"
     return problems, summary
+
+
+def check_gerber_profile(path):
+    """The strict R12 form Gerber AccuMark reads (ezdxf's gerber_D6673 add-on): 7-bit ASCII,
+    AC1009 (no $ACADVER either: the HEADER is empty), an empty HEADER section, no TABLES section."""
+    raw = path.read_bytes()
+    problems = []
+    if any(b > 127 for b in raw):
+        problems.append("not 7-bit ASCII")
+    lines = [line.strip() for line in raw.decode("ascii", "replace").splitlines()]
+    pairs = list(zip(lines[0::2], lines[1::2]))
+    sections, current, header_vars = [], None, 0
+    for i, (code, value) in enumerate(pairs):
+        if code == "0" and value == "SECTION" and i + 1 < len(pairs) and pairs[i + 1][0] == "2":
+            current = pairs[i + 1][1]
+            sections.append(current)
+        elif code == "0" and value == "ENDSEC":
+            current = None
+        elif current == "HEADER" and code == "9":
+            header_vars += 1
+    if "TABLES" in sections:
+        problems.append("has a TABLES section")
+    if "HEADER" not in sections or header_vars:
+        problems.append(f"HEADER not empty ({header_vars} variables)")
+    return problems
 
 
 def check_svg(path):

@@ -402,7 +402,9 @@ fn size_chart_flow_json_and_csv() {
         "straight-skirt.nest.svg",
         "straight-skirt.nest.dxf",
         "straight-skirt.rules.csv",
-        "straight-skirt.rules.rul",
+        "straight-skirt.nest.rul",
+        "straight-skirt-M.pattern.accumark.dxf",
+        "straight-skirt.nest.accumark.dxf",
         "report.json",
     ] {
         assert!(names.iter().any(|n| n == want), "{want} missing from {names:?}");
@@ -539,8 +541,8 @@ fn batch_jobs_are_deterministic_and_fail_with_named_fields() {
     assert_eq!(arts.len(), done_b["artefacts"].as_array().unwrap().len());
     assert_eq!(
         arts.len(),
-        2 * (2 * 4 + 4) + 1,
-        "2 templates × (2 sizes × 4 + nest, nest DXF, rules CSV, RUL) + report"
+        2 * (2 * 5 + 5) + 1,
+        "2 templates × (2 sizes × 5 + nest, nest DXF, nest AccuMark DXF, rules CSV, RUL) + report"
     );
     for art in arts {
         let h = art["href"].as_str().unwrap();

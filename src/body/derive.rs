@@ -653,8 +653,7 @@ fn section_plane(
             let inward = (crotch.x - ankle.x).signum();
             // the middle of the ankle: its horizontal section's x extent (an ankle grows with the
             // body; a fixed half width would slide the line round the ankle from size to size)
-            let ankle_x = ankle_middle_x(mesh, ankle)
-                .unwrap_or(ankle.x + inward * opts.ankle_half_width_mm / MM_PER_M);
+            let ankle_x = ankle_middle_x(mesh, ankle).unwrap_or(ankle.x + inward * opts.ankle_half_width_mm / MM_PER_M);
             let ankle_mid = DVec3::new(ankle_x, ankle.y, ankle.z);
             Plane::from_point_normal(thigh_mid, (ankle_mid - thigh_mid).cross(DVec3::Z))
                 .ok_or_else(|| FeatureError::NoSection { curve, reason: "(thigh and ankle points coincide)".into() })?

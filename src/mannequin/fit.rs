@@ -450,19 +450,10 @@ pub fn fit_size(model: &BodyModel, row: &SizeRow, opts: &FitOptions) -> Result<F
                 *s *= row.targets[id] / m;
             }
         }
-        let positions =
-            scale_profiles(&base_positions, &profiles, &scales, &arms, &lm0, opts.blend_falloff_mm, None);
-        let mesh = TriMesh::new(positions, model.triangles().to_vec()).map_err(MannequinError::from)?;
-        let lm = hm08_landmarks(model, &mesh, &opts.landmarks)?;
-        body = derive_features(mesh, &lm, &opts.derive)?;
-        measured = measure(&body, &opts.measure);
+        let positions = scale_profiles(&base_positions, &profiles, &scales, &arms, &lm0, opts.blend_falloff_mm, None);
+        (body, measured) = remeasure(model, positions, opts)?;
     }
-    let residuals = ids
-        .iter()
-        .map(|&id| {
-            (id, Residual { target_m: row.targets[&id], achieved_m: measured.get(&id).copied().unwrap_or(f64::NAN) })
-        })
-        .collect();
+    let residuals = residuals_of(&ids, row, &measured);
     Ok(FittedMannequin {
         size: row.size.clone(),
         params,
@@ -473,6 +464,28 @@ pub fn fit_size(model: &BodyModel, row: &SizeRow, opts: &FitOptions) -> Result<F
         iterations,
         scaling_rounds: rounds,
     })
+}
+
+/// The feature body and measurements of hm08 `positions` (a scaled body).
+fn remeasure(
+    model: &BodyModel,
+    positions: Vec<DVec3>,
+    opts: &FitOptions,
+) -> Result<(FeatureBody, Measurements), FitError> {
+    let mesh = TriMesh::new(positions, model.triangles().to_vec()).map_err(MannequinError::from)?;
+    let lm = hm08_landmarks(model, &mesh, &opts.landmarks)?;
+    let body = derive_features(mesh, &lm, &opts.derive)?;
+    let measured = measure(&body, &opts.measure);
+    Ok((body, measured))
+}
+
+/// Target and achieved value of each of `ids` of `row`.
+fn residuals_of(ids: &[MeasurementId], row: &SizeRow, measured: &Measurements) -> BTreeMap<MeasurementId, Residual> {
+    ids.iter()
+        .map(|&id| {
+            (id, Residual { target_m: row.targets[&id], achieved_m: measured.get(&id).copied().unwrap_or(f64::NAN) })
+        })
+        .collect()
 }
 
 /// One size of a chart graded from the run's base size (module docs,
@@ -555,17 +568,9 @@ pub fn fit_graded(
         for p in &mut positions {
             p.y = y_floor + height_scale * (p.y - y_floor);
         }
-        let mesh = TriMesh::new(positions, model.triangles().to_vec()).map_err(MannequinError::from)?;
-        let lm = hm08_landmarks(model, &mesh, &opts.landmarks)?;
-        body = derive_features(mesh, &lm, &opts.derive)?;
-        measured = measure(&body, &opts.measure);
+        (body, measured) = remeasure(model, positions, opts)?;
     }
-    let residuals = ids
-        .iter()
-        .map(|&id| {
-            (id, Residual { target_m: row.targets[&id], achieved_m: measured.get(&id).copied().unwrap_or(f64::NAN) })
-        })
-        .collect();
+    let residuals = residuals_of(&ids, row, &measured);
     Ok(FittedMannequin {
         size: row.size.clone(),
         params: base.params.clone(),

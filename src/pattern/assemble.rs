@@ -32,10 +32,15 @@
 //! sit at matching distances along the seam up to the seam's mismatch
 //! ([`SeamReport`]).
 //!
-//! **Internal lines** — interior template edges whose end nodes lie on the
-//! same girth (their feature points share the first name token, e.g.
-//! `hip_front` and `hip_front_left`), as fine chains: the hip, bust and
-//! knee lines.
+//! **Internal lines** — (a) girth lines: interior template edges whose two
+//! nodes lie on the same girth — their feature points both on that girth
+//! curve ([`GIRTH_CURVES`]) and each node level with its point (its Eq. (2)
+//! offset's height within [`RING_PLANE_TOLERANCE_M`]: a hem node tied to a
+//! hip point 35 cm above is not on the hip) —, as fine chains, named after
+//! the girth (`hip_line`, `thigh_line`, `bust_line`); (b) every dart as a
+//! pattern maker draws it, two straight legs from the mouth to the apex
+//! (mouth → apex → mouth): the flattened slit's own legs bend and, where the
+//! flattening squeezes a narrow dart, cross.
 //!
 //! **Failure modes** — [`PieceError`]: the grain line's nodes not in the
 //! panel, or `uv` not one point per panel vertex.
@@ -47,7 +52,9 @@ use serde::{Deserialize, Serialize};
 
 use super::panels::{Lineage, Panel, SeamChain};
 use super::piece::{GradePoint, GradePointKind, InternalLine, PatternPiece, PieceNotch};
+use crate::body::vocab::{point_def, CurveId, PointId};
 use crate::template::format::Template;
+use crate::template::girth::RING_PLANE_TOLERANCE_M;
 
 /// Metres to millimetres.
 const MM_PER_M: f64 = 1e3;
@@ -233,8 +240,16 @@ pub fn assemble(
     }
     let mut internal_lines = internal_lines(t, panel, lineage, &pts);
     for d in &panel.darts {
-        // the dart's legs, opening → apex → opening
-        let points = d.a.iter().chain(d.b.iter().rev().skip(1)).map(|&l| pts[l as usize]).collect();
+        // the dart's legs, straight (opening → apex → opening), or as flattened where a
+        // straight leg would leave the piece (a dart from a concave seam)
+        let (Some(&mouth_a), Some(&apex), Some(&mouth_b)) = (d.a.first(), d.a.last(), d.b.first()) else { continue };
+        let straight = vec![pts[mouth_a as usize], pts[apex as usize], pts[mouth_b as usize]];
+        let leaves = straight.windows(2).any(|leg| crosses_polygon(leg[0], leg[1], &sew_line));
+        let points = if leaves {
+            d.a.iter().chain(d.b.iter().rev().skip(1)).map(|&l| pts[l as usize]).collect()
+        } else {
+            straight
+        };
         internal_lines.push(InternalLine { name: d.name.clone(), points });
     }
     let grain_len = grain.length();
@@ -242,6 +257,7 @@ pub fn assemble(
         name: panel.name.clone(),
         size: size.to_string(),
         quantity: template_panel.quantity,
+        cut_pair: false,
         sew_line,
         corners,
         cut_line,
@@ -255,49 +271,124 @@ pub fn assemble(
     Ok(PlacedPanel { piece, uv_mm: pts })
 }
 
+/// The girths whose lines are drawn inside a piece (module docs).
+pub const GIRTH_CURVES: [CurveId; 12] = [
+    CurveId::NeckBase,
+    CurveId::Chest,
+    CurveId::Bust,
+    CurveId::Underbust,
+    CurveId::Waist,
+    CurveId::Hip,
+    CurveId::ThighLeft,
+    CurveId::ThighRight,
+    CurveId::KneeLeft,
+    CurveId::KneeRight,
+    CurveId::AnkleLeft,
+    CurveId::AnkleRight,
+];
+
 /// Interior girth lines of the panel (module docs), merged into polylines.
 fn internal_lines(t: &Template, panel: &Panel, lineage: &Lineage, pts: &[DVec2]) -> Vec<InternalLine> {
     let on_outline: HashSet<u32> = panel.outline.iter().copied().collect();
-    let token = |node: u32| t.nodes[node as usize].point.as_str().split('_').next().unwrap_or("").to_string();
-    // per girth: chains of local ids, joined end to end
+    // the girth both nodes of an edge lie on, if any (module docs)
+    let girth = |e: &crate::template::format::Edge| -> Option<CurveId> {
+        let (na, nb) = (&t.nodes[e.start as usize], &t.nodes[e.end as usize]);
+        let level = |n: &crate::template::format::Node| n.offset[1].abs() <= RING_PLANE_TOLERANCE_M;
+        let curves = |p: crate::body::vocab::PointId| {
+            let d = point_def(p);
+            [d.f1, d.f2]
+        };
+        (level(na) && level(nb)).then_some(())?;
+        GIRTH_CURVES.iter().copied().find(|c| curves(na.point).contains(c) && curves(nb.point).contains(c))
+    };
+    let side = |s: &'static str| s.strip_suffix("_left").or_else(|| s.strip_suffix("_right")).unwrap_or(s);
+    let local_chain = |a: u32, b: u32| -> Option<Vec<u32>> {
+        lineage.chain(a, b)?.iter().map(|&g| panel.local(g)).collect::<Option<Vec<u32>>>()
+    };
+    // per girth: the fine chains of its interior edges
     let mut lines: Vec<(String, Vec<u32>)> = Vec::new();
     for e in &t.edges {
         let (Some(a), Some(b)) = (panel.local(e.start), panel.local(e.end)) else { continue };
-        if token(e.start) != token(e.end) || (on_outline.contains(&a) && on_outline.contains(&b)) {
+        let Some(curve) = girth(e) else { continue };
+        if on_outline.contains(&a) && on_outline.contains(&b) {
             continue;
         }
-        let Some(chain) = lineage.chain(e.start, e.end) else { continue };
-        let Some(mut chain) = chain.iter().map(|&g| panel.local(g)).collect::<Option<Vec<u32>>>() else { continue };
-        let name = format!("{}_line", token(e.start));
-        let mut merged = false;
-        for (_, line) in lines.iter_mut().filter(|(n, _)| *n == name) {
-            let (first, last) = (line[0], line[line.len() - 1]);
-            if last == chain[0] {
-                line.extend_from_slice(&chain[1..]);
-            } else if last == chain[chain.len() - 1] {
-                chain.reverse();
-                line.extend_from_slice(&chain[1..]);
-            } else if first == chain[chain.len() - 1] {
-                chain.extend_from_slice(&line[1..]);
-                *line = chain.clone();
-            } else if first == chain[0] {
-                chain.reverse();
-                chain.extend_from_slice(&line[1..]);
-                *line = chain.clone();
-            } else {
-                continue;
+        let Some(chain) = local_chain(e.start, e.end) else { continue };
+        lines.push((format!("{}_line", side(curve.as_str())), chain));
+    }
+    // a ring that closes through the crotch node (the thigh, `template::girth::ring_loop`):
+    // its line runs on to the crotch on the outline
+    let crotch: Vec<u32> = (0..t.nodes.len() as u32)
+        .filter(|&n| {
+            t.nodes[n as usize].point == PointId::Crotch && panel.local(n).is_some_and(|l| on_outline.contains(&l))
+        })
+        .collect();
+    let ends_inside = |l: u32| !on_outline.contains(&l);
+    let mut closures = Vec::new();
+    for (name, chain) in &lines {
+        for &end in [chain[0], chain[chain.len() - 1]].iter().filter(|&&l| ends_inside(l)) {
+            let node = panel.global[end as usize];
+            for e in t.edges.iter().filter(|e| !e.profile.is_empty()) {
+                let other = if e.start == node {
+                    e.end
+                } else if e.end == node {
+                    e.start
+                } else {
+                    continue;
+                };
+                if crotch.contains(&other) && t.nodes[node as usize].point != PointId::Crotch {
+                    if let Some(c) = local_chain(node, other) {
+                        closures.push((name.clone(), c));
+                    }
+                }
             }
-            merged = true;
-            break;
-        }
-        if !merged {
-            lines.push((name, chain));
         }
     }
+    lines.extend(closures);
+    // chains of one girth joined end to end until none shares an end with another
+    let mut merged: Vec<(String, Vec<u32>)> = Vec::new();
+    for (name, chain) in lines {
+        merged.push((name, chain));
+        loop {
+            let last = merged.len() - 1;
+            let joined = (0..last).find_map(|i| {
+                let (a, b) = (&merged[i].1, &merged[last].1);
+                (merged[i].0 == merged[last].0).then_some(())?;
+                let (a0, a1, b0, b1) = (a[0], a[a.len() - 1], b[0], b[b.len() - 1]);
+                let line = if a1 == b0 {
+                    a.iter().chain(&b[1..]).copied().collect()
+                } else if a1 == b1 {
+                    a.iter().chain(b.iter().rev().skip(1)).copied().collect()
+                } else if a0 == b1 {
+                    b.iter().chain(&a[1..]).copied().collect()
+                } else if a0 == b0 {
+                    b.iter().rev().chain(&a[1..]).copied().collect()
+                } else {
+                    return None;
+                };
+                Some((i, line))
+            });
+            let Some((i, line)) = joined else { break };
+            let (name, _) = merged.remove(last);
+            merged.remove(i);
+            merged.push((name, line));
+        }
+    }
+    let lines = merged;
     lines
         .into_iter()
         .map(|(name, ids)| InternalLine { name, points: ids.iter().map(|&l| pts[l as usize]).collect() })
         .collect()
+}
+
+/// Whether segment `pq` properly crosses an edge of the closed polygon `poly`.
+pub fn crosses_polygon(p: DVec2, q: DVec2, poly: &[DVec2]) -> bool {
+    let o = |a: DVec2, b: DVec2, c: DVec2| (b - a).perp_dot(c - a);
+    let n = poly.len();
+    (0..n).any(|k| {
+        let (r, s) = (poly[k], poly[(k + 1) % n]);
+        o(r, s, p) * o(r, s, q) < 0.0 && o(p, q, r) * o(p, q, s) < 0.0
+    })
 }
 
 /// Signed area of a closed polygon (positive counter-clockwise).

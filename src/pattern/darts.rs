@@ -22,7 +22,8 @@
 //!    (the caller's flattening, which sews the new legs to equal length) and
 //!    keeps the candidate with the lowest 95th-percentile strain, provided
 //!    the flattening has no flipped triangle, the sew line (darts closed)
-//!    does not cross itself, every dart opens by at least the intake the
+//!    does not cross itself, every dart's straight legs (mouth → apex) stay
+//!    inside the piece, every dart opens by at least the intake the
 //!    caller asks for — a cut that wants to overlap marks a saddle, where a
 //!    dart cannot help — and the 95th percentile drops by at least
 //!    [`AutoDartOptions::min_gain`].
@@ -45,7 +46,7 @@ use std::collections::{BinaryHeap, HashSet};
 use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
-use super::assemble::{polyline_length_3d, self_intersects};
+use super::assemble::{crosses_polygon, polyline_length_3d, self_intersects};
 use super::flatten::{Distortion, Flattening};
 use super::panels::{DartLegs, Panel};
 
@@ -260,6 +261,13 @@ fn acceptable(panel: &Panel, trial: &Trial, min_intake: f64) -> Option<f64> {
     }
     let mut least = f64::INFINITY;
     for d in &panel.darts {
+        // a dart a pattern maker can draw: straight legs from its mouth to its apex inside the
+        // piece (a mouth on a concave seam, the back crotch, puts them outside: a V-slit)
+        let (Some(&a), Some(&apex), Some(&b)) = (d.a.first(), d.a.last(), d.b.first()) else { return None };
+        let (a, apex, b) = (uv[a as usize], uv[apex as usize], uv[b as usize]);
+        if crosses_polygon(a, apex, &sew) || crosses_polygon(apex, b, &sew) {
+            return None;
+        }
         let opening = dart_opening(&rim, uv, d)?;
         if opening < min_intake {
             return None;

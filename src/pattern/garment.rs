@@ -58,6 +58,7 @@ use super::assemble::{
 };
 use super::darts::{dart_opening, insert_darts, AutoDartOptions, DartOrigin, FoundDart, Trial};
 use super::flatten::{distortion, flatten_with_sewn_lengths, Distortion, FlattenError, FlattenOptions, Flattening};
+use super::grade::{mirror_difference, MirrorDifference};
 use super::panels::{cut, Panel, PanelError, SeamChain};
 use super::piece::PatternPiece;
 use crate::template::format::Template;
@@ -96,6 +97,16 @@ pub struct PatternOptions {
     /// 5–6 mm of a vertex after the depth-map collision; a scan's halves
     /// differ by centimetres, and each side is searched on its own).
     pub mirror_tolerance_mm: f64,
+    /// A template mirror pair is cut as one piece (quantity 2, a cut pair)
+    /// when, on the size that decides (a run's base size, or a single
+    /// grade), its two pieces' sew lines lie within this of each other after
+    /// mirroring ([`crate::pattern::grade::mirror_difference`]), mm. Default
+    /// 3 (1/8 in, the tolerance a pattern is checked to: on mirror-symmetric
+    /// mannequins the pieces mirror within 0.1–1.8 mm, the collision stage's
+    /// noise; a scan's halves differ by centimetres).
+    pub cut_pair_line_mm: f64,
+    /// … and their areas, widths and heights within this, %. Default 1.
+    pub cut_pair_extent_pct: f64,
 }
 
 impl Default for PatternOptions {
@@ -109,6 +120,8 @@ impl Default for PatternOptions {
             negotiation_power: 2.0,
             search_every_size: false,
             mirror_tolerance_mm: 10.0,
+            cut_pair_line_mm: 3.0,
+            cut_pair_extent_pct: 1.0,
         }
     }
 }
@@ -156,6 +169,26 @@ pub struct DartPlan {
     pub left_out: Vec<(String, f64)>,
     /// Darts found on the base size.
     pub found: Vec<PlannedDart>,
+    /// Template mirror pairs cut as one piece (a cut pair) on the base size,
+    /// and so on every size of the run: one construction, the same pieces
+    /// in every size.
+    #[serde(default)]
+    pub cut_pairs: Vec<[String; 2]>,
+}
+
+/// How a template mirror pair came out ([`Template::mirror_pairs`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CutPair {
+    /// The two panels, as the template pairs them.
+    pub panels: [String; 2],
+    /// The piece that stands for both where they are cut as a pair
+    /// (`front` for `left_front`/`right_front`).
+    pub piece: String,
+    /// Whether they are cut as one piece (quantity 2); otherwise both stay,
+    /// each cut once (a scan's halves differ).
+    pub cut_as_pair: bool,
+    /// How far the second is from the mirror image of the first.
+    pub difference: MirrorDifference,
 }
 
 /// A found dart of a [`DartPlan`].
@@ -232,6 +265,10 @@ pub struct GarmentPattern {
     /// a single grade), or carried from the run's base size.
     #[serde(default)]
     pub dart_plan: DartPlan,
+    /// Every template mirror pair: cut as one piece or kept apart, and by
+    /// how much its two pieces differ.
+    #[serde(default)]
+    pub cut_pairs: Vec<CutPair>,
 }
 
 /// The pattern of the fine mesh (`positions` in metres, `triangles`) that
@@ -264,6 +301,69 @@ pub fn pattern(
 /// [`PatternError`]; [`PatternError::CarriedDart`] when a planned chain is
 /// not a line of this mesh's panel.
 pub fn pattern_with_plan(
+    t: &Template,
+    positions: &[DVec3],
+    triangles: &[[u32; 3]],
+    levels: usize,
+    size: &str,
+    opts: &PatternOptions,
+    plan: Option<&DartPlan>,
+) -> Result<GarmentPattern, PatternError> {
+    let mut g = pattern_darts(t, positions, triangles, levels, size, opts, plan)?;
+    pair_pieces(t, &mut g, plan.map(|p| p.cut_pairs.as_slice()), opts);
+    Ok(g)
+}
+
+/// The pieces of every template mirror pair: cut as one (the first panel's
+/// piece named for both, quantity summed, [`PatternPiece::cut_pair`]) where
+/// `decided` lists the pair or, without a run's decision, where the two
+/// mirror within [`PatternOptions::cut_pair_line_mm`] and
+/// [`PatternOptions::cut_pair_extent_pct`]; the decision joins the
+/// pattern's plan, and every pair is reported with its difference.
+fn pair_pieces(t: &Template, g: &mut GarmentPattern, decided: Option<&[[String; 2]]>, opts: &PatternOptions) {
+    for [a, b] in &t.mirror_pairs {
+        let (Some(ia), Some(ib)) =
+            (g.pieces.iter().position(|p| p.name == *a), g.pieces.iter().position(|p| p.name == *b))
+        else {
+            continue;
+        };
+        let difference = mirror_difference(&g.pieces[ia], &g.pieces[ib]);
+        let pair = [a.clone(), b.clone()];
+        let cut_as_pair = match decided {
+            Some(list) => list.contains(&pair),
+            None => {
+                let extent = difference.area_pct.max(difference.width_pct).max(difference.height_pct);
+                difference.sew_line_mm <= opts.cut_pair_line_mm && extent <= opts.cut_pair_extent_pct
+            }
+        };
+        let piece = if cut_as_pair { pair_name(a, b) } else { a.clone() };
+        if cut_as_pair {
+            let quantity = g.pieces[ib].quantity;
+            let first = &mut g.pieces[ia];
+            first.name = piece.clone();
+            first.quantity += quantity;
+            first.cut_pair = true;
+            g.pieces.remove(ib);
+            g.dart_plan.cut_pairs.push(pair.clone());
+        }
+        g.cut_pairs.push(CutPair { panels: pair, piece, cut_as_pair, difference });
+    }
+}
+
+/// The name of the piece that stands for a mirror pair: the two panel names
+/// without their side (`left_front`, `right_front` → `front`;
+/// `sleeve_left`, `sleeve_right` → `sleeve`), else the first name.
+fn pair_name(a: &str, b: &str) -> String {
+    let prefixed = a.strip_prefix("left_").zip(b.strip_prefix("right_"));
+    let suffixed = a.strip_suffix("_left").zip(b.strip_suffix("_right"));
+    match prefixed.or(suffixed) {
+        Some((x, y)) if x == y && !x.is_empty() => x.to_owned(),
+        _ => a.to_owned(),
+    }
+}
+
+/// [`pattern_with_plan`] before the mirror pairs are paired: the darts.
+fn pattern_darts(
     t: &Template,
     positions: &[DVec3],
     triangles: &[[u32; 3]],
@@ -857,6 +957,7 @@ fn finish(
         seams: seam_reports,
         darts_left_out: Vec::new(),
         dart_plan: DartPlan::default(),
+        cut_pairs: Vec::new(),
     };
     (g, darts)
 }

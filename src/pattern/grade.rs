@@ -138,6 +138,8 @@ pub struct NestStep {
     /// Sew-line points of the smaller size outside the larger one's, farther
     /// than [`NEST_TOUCH_MM`] from it.
     pub outside: usize,
+    /// How far the farthest of them lies outside, mm (0 when none does).
+    pub outside_mm: f64,
 }
 
 /// Two sew lines closer than this touch (a shared stack point or grain
@@ -161,14 +163,19 @@ pub fn nest_steps(nest: &[(String, Vec<PatternPiece>)]) -> Vec<NestStep> {
                     }
                 }
             }
-            let outside =
-                a.iter().filter(|&&p| !point_in_polygon(b, p) && distance_to_polygon(b, p) > NEST_TOUCH_MM).count();
+            let beyond: Vec<f64> = a
+                .iter()
+                .filter(|&&p| !point_in_polygon(b, p))
+                .map(|&p| distance_to_polygon(b, p))
+                .filter(|&d| d > NEST_TOUCH_MM)
+                .collect();
             out.push(NestStep {
                 piece: piece.clone(),
                 smaller: w[0].size.clone(),
                 larger: w[1].size.clone(),
                 crossings,
-                outside,
+                outside: beyond.len(),
+                outside_mm: beyond.iter().copied().fold(0.0, f64::max),
             });
         }
     }
@@ -256,7 +263,7 @@ pub fn step_regularity(table: &GradeRuleTable, chart_steps: Option<&[f64]>) -> V
 /// item 2): the second mirrored across the grain line through the stack
 /// point (`x → −x`: pieces are placed stack point at the origin, grain
 /// along −y) and compared with the first.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct MirrorDifference {
     /// |A₁ − A₂| / A₁ of the areas inside the sew lines, %.
     pub area_pct: f64,
@@ -302,6 +309,7 @@ mod tests {
             name: "front".into(),
             size: size.into(),
             quantity: 1,
+            cut_pair: false,
             sew_line: sew.clone(),
             corners: vec![0, 1, 2, 3],
             cut_line: sew.clone(),
@@ -362,6 +370,8 @@ mod tests {
         assert_eq!(steps.len(), 1);
         // the sides x = 100 (down to −100) and y = −80 cross once; the bottom corners are outside
         assert_eq!((steps[0].crossings, steps[0].outside), (1, 2), "{:?}", steps[0]);
+        // …by the square's 20 mm below the rectangle
+        assert!((steps[0].outside_mm - 20.0).abs() < 1e-9, "{:?}", steps[0]);
         // steps +20, +20, −5 of one point: the last runs back; scaled by a chart whose last
         // step is a quarter of the others it is +20 again
         let mut t = grade_rules("t", &sizes, "s0").expect("rules");

@@ -1,8 +1,8 @@
 //! Sewing patterns from the refined garment (seed 000 §6; issue #5): cut
 //! into panels along the seams ([`panels`]), flatten each ([`flatten`]),
 //! build pattern pieces with sew and cut lines, notches and grain
-//! ([`assemble`]), grade them across sizes ([`grade`]) and export them
-//! ([`export`]).
+//! ([`assemble`]), check their internal lines ([`lines`]), grade them
+//! across sizes ([`grade`]) and export them ([`export`]).
 
 pub mod assemble;
 pub mod darts;
@@ -10,5 +10,6 @@ pub mod export;
 pub mod flatten;
 pub mod garment;
 pub mod grade;
+pub mod lines;
 pub mod panels;
 pub mod piece;

@@ -67,6 +67,11 @@ pub struct PatternPiece {
     pub size: String,
     /// Pieces to cut.
     pub quantity: u32,
+    /// Whether this piece stands for a mirror pair of panels, cut as a pair
+    /// (one right side up, one face down: AAMA's mirrored piece). Its
+    /// `quantity` counts both.
+    #[serde(default)]
+    pub cut_pair: bool,
     /// The sew (stitch) line: closed polygon, counter-clockwise, mm.
     pub sew_line: Vec<DVec2>,
     /// Indices into `sew_line` of its corners (turn points); the rest are curve points.

@@ -319,6 +319,11 @@ fn grade_body(
             bytes: dxf::pieces_dxf(&t.name, pieces, &Default::default())?,
         });
         out.push(Artefact {
+            name: format!("{stem}.pattern.accumark.dxf"),
+            media_type: "image/vnd.dxf",
+            bytes: dxf::pieces_dxf(&t.name, pieces, &gerber())?,
+        });
+        out.push(Artefact {
             name: format!("{stem}.pattern.json"),
             media_type: "application/json",
             bytes: serde_json::to_vec(&g.pattern).unwrap_or_default(),
@@ -404,6 +409,11 @@ fn garment_report(name: &str, g: &Graded, fit: serde_json::Value) -> serde_json:
     })
 }
 
+/// The DXF options of the Gerber AccuMark profile (strict R12: empty HEADER, no TABLES).
+fn gerber() -> dxf::DxfOptions {
+    dxf::DxfOptions { profile: dxf::DxfProfile::GerberAccuMark, ..Default::default() }
+}
+
 /// Nests, grade rules and their exports of one template over sizes.
 fn graded_nest(
     template: &str,
@@ -425,12 +435,18 @@ fn graded_nest(
         bytes: dxf::nest_dxf_with_rules(template, &nested, &rules, &Default::default())?,
     });
     out.push(Artefact {
+        name: format!("{template}.nest.accumark.dxf"),
+        media_type: "image/vnd.dxf",
+        bytes: dxf::nest_dxf_with_rules(template, &nested, &rules, &gerber())?,
+    });
+    out.push(Artefact {
         name: format!("{template}.rules.csv"),
         media_type: "text/csv",
         bytes: rul::rules_table_csv(&rules).into_bytes(),
     });
     out.push(Artefact {
-        name: format!("{template}.rules.rul"),
+        // named after the nest DXF whose `# n` texts it numbers, as CAD systems pair them
+        name: format!("{template}.nest.rul"),
         media_type: "text/plain",
         bytes: rul::rules_rul(&rules).into_bytes(),
     });

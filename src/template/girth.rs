@@ -37,8 +37,9 @@
 //! its profiles sample it*, that node included ([`sampled_radial`]; the
 //! arcs to it as decoding carries them, Eq. (5) copies onto the eased
 //! nodes), and the girth itself the declared ease ([`ring_radial`]). A hung
-//! node keeps its hang and its arcs Eq. (5)'s copy, and the report states
-//! the ease the hang gives ([`expected_ease`]).
+//! node keeps its hang, and its arcs Eq. (5)'s copy unless that cuts into
+//! the body ([`refit_rings`]); the report states the
+//! ease the hang gives ([`expected_ease`]).
 //!
 //! No failure modes beyond a profile that cannot be built
 //! ([`ProfileError`], with the edge).
@@ -529,13 +530,18 @@ pub fn place_ring_nodes(t: &Template, body: &FeatureBody, positions: &mut [DVec3
 /// them, `hung` the nodes a hang moved; `profiles` are indexed by template
 /// edge and oriented from the edge's start node. Each arc between two ring
 /// nodes runs along the eased girth, its ends on the decoded nodes. The
-/// arcs to a node the ring closes through ([`RingLoop::through`]) and to a
-/// hung node keep Eq. (5)'s copy (the solved offset counts them as such,
-/// [`sampled_radial`]): bending them along the new body's girth
-/// onto the crotch node put 2–4 of 120 trouser pieces over the 3 % strain
-/// bar (a kink where the arc turns up to the crotch), and bending them onto
-/// hung knee nodes left crotch triangles through the body on three heavy
-/// men.
+/// arcs to a node the ring closes through ([`RingLoop::through`]) keep
+/// Eq. (5)'s copy (the solved offset counts them as such,
+/// [`sampled_radial`]): bending them along the new body's girth onto the
+/// crotch node put 2–4 of 120 trouser pieces over the 3 % strain bar (a
+/// kink where the arc turns up to the crotch). An arc to a hung node keeps
+/// Eq. (5)'s copy, unless the copy cuts into the body: then each of its
+/// points is replaced by the eased arc's (its end bent onto the hung node)
+/// where that runs further out from the girth's centre in its plane.
+/// Bending every such arc onto hung knee nodes left crotch triangles
+/// through the body on three heavy men and on pop39's scan, and never
+/// bending them let a slim woman's belly take 6 mm of the skirt's 40 mm hip
+/// ease (the copy cut 10 mm into the girth; pop00).
 /// Returns how many profiles were refitted.
 ///
 /// # Errors
@@ -555,11 +561,14 @@ pub fn refit_rings(
         if total <= 0.0 {
             continue;
         }
+        let centre = plane.project(loop_.points.iter().copied().sum::<DVec3>() / loop_.points.len().max(1) as f64);
+        // mean in-plane distance of an arc's points from the girth's centre
+        let reach = |pts: &[DVec3]| {
+            pts.iter().map(|&p| plane.project(p).distance(centre)).sum::<f64>() / pts.len().max(1) as f64
+        };
         for edge in ring_edges(t, body, placed, g.curve, &[]) {
             let e = &t.edges[edge as usize];
-            if hung.contains(&e.start) || hung.contains(&e.end) {
-                continue;
-            }
+            let hung_arc = hung.contains(&e.start) || hung.contains(&e.end);
             let Some(old) = profiles.get(edge as usize).and_then(|p| p.as_ref()) else { continue };
             let n = old.points().len();
             let param = |node: u32| -> Option<f64> {
@@ -569,7 +578,31 @@ pub fn refit_rings(
             let (Some(sa), Some(sb)) = (param(e.start), param(e.end)) else { continue };
             // the ring runs the shorter way round between neighbouring nodes
             let ends = (Some(positions[e.start as usize]), Some(positions[e.end as usize]));
-            let pts = eased_arc(loop_, plane, sa, shorter_way(sa, sb, total), n, radial, ends);
+            let mut pts = eased_arc(loop_, plane, sa, shorter_way(sa, sb, total), n, radial, ends);
+            // an arc to a hung node: each point of Eq. (5)'s copy, or of the eased arc where that
+            // runs further out (a copy that cuts into this body's girth takes its ease away)
+            if hung_arc {
+                // only a copy that cuts into the body is bent (bending the others, hung knees,
+                // left crotch triangles through the body)
+                let cuts_in = old.points().iter().any(|&q| {
+                    let c = crate::geom::query::closest_point(&body.mesh, q);
+                    (q - c.point).dot(body.mesh.face_area_vector(c.face)) < 0.0
+                });
+                if !cuts_in || old.points().len() != pts.len() {
+                    continue;
+                }
+                let mut any = false;
+                for (p, &q) in pts.iter_mut().zip(old.points()) {
+                    if reach(&[q]) >= reach(&[*p]) {
+                        *p = q;
+                    } else {
+                        any = true;
+                    }
+                }
+                if !any {
+                    continue;
+                }
+            }
             profiles[edge as usize] = Some(Profile::new(pts).map_err(|err| (edge, err))?);
             refitted += 1;
         }

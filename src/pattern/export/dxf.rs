@@ -4,6 +4,12 @@
 //!
 //! # Contract
 //!
+//! - **Profiles** ([`DxfProfile`], issue #14 item 6): [`DxfProfile::Aama`]
+//!   (default) writes the file described below; [`DxfProfile::GerberAccuMark`]
+//!   writes the strict R12 form Gerber AccuMark's parser wants (as ezdxf's
+//!   `gerber_D6673` add-on documents it): an *empty* HEADER section, *no*
+//!   TABLES section, no text style named on TEXT (R12's default STANDARD),
+//!   7-bit ASCII, and otherwise the same BLOCKS and ENTITIES.
 //! - **Format**: an ASCII DXF, AutoCAD Release 12 (`$ACADVER` = `AC1009`), CR
 //!   LF line ends, no handles (as the AAMA files pattern systems write):
 //!   HEADER (`$ACADVER`, `$INSBASE`, `$EXTMIN`, `$EXTMAX`, `$CLAYER`), TABLES
@@ -34,7 +40,8 @@
 //!   all sizes of a piece are inserted at the same point (stacked).
 //! - **Layers inside a block** (AAMA numbering):
 //!   - `1` boundary: the cut line as a closed `POLYLINE`, and the piece
-//!     system text `Piece Name: …`, `Size: …`, `Quantity: …`;
+//!     system text `Piece Name: …`, `Size: …`, `Quantity: …` (and
+//!     `Annotation: cut pair (one mirrored)` for a mirror pair cut as one);
 //!   - `2` turn points / `3` curve points: a `POINT` at every vertex of the
 //!     boundary, the sew line and the internal lines — turn points at the
 //!     corners (`PatternPiece::corners`; a boundary vertex takes the kind of
@@ -51,7 +58,8 @@
 //!   - `14` sew line: the sew line as a closed `POLYLINE`.
 //! - **Grade rules** (the `*_with_rules` functions): the AAMA way of naming
 //!   a grade point's rule is a `TEXT` `# n` at the point, on the layer of
-//!   the point (2 or 3). Every sew-line vertex carrying a grade point gets
+//!   the point (2 or 3); in a nest only on the sample size's pieces (the
+//!   table's base size), as graded nests carry them. Every sew-line vertex carrying a grade point gets
 //!   its rule number, and so does the boundary vertex offset from it; rules
 //!   are matched to grade points by template node. The numbers refer to the
 //!   `.RUL` file of the same table ([`super::rul`]).
@@ -129,9 +137,22 @@ pub enum NotchEntity {
     Line,
 }
 
+/// Which importer's form of the file to write (module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum DxfProfile {
+    /// The AAMA / ASTM D6673 form with HEADER variables and TABLES (CLO,
+    /// Lectra, Optitex, Valentina, ezdxf).
+    #[default]
+    Aama,
+    /// Gerber AccuMark's strict R12 form: empty HEADER, no TABLES.
+    GerberAccuMark,
+}
+
 /// How the DXF is written. Lengths are millimetres.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DxfOptions {
+    /// The importer's form of the file. Default [`DxfProfile::Aama`].
+    pub profile: DxfProfile,
     /// Placement of the pieces side by side. Default [`ShelfLayout::default`] (20 mm gap, 1600 mm rows).
     pub layout: ShelfLayout,
     /// Height of the style and piece system text, mm. Default 5 mm.
@@ -158,6 +179,7 @@ pub struct DxfOptions {
 impl Default for DxfOptions {
     fn default() -> Self {
         Self {
+            profile: DxfProfile::Aama,
             layout: ShelfLayout::default(),
             text_height_mm: 5.0,
             line_spacing: 1.5,
@@ -266,6 +288,9 @@ pub fn read_outlines(bytes: &[u8]) -> Result<Vec<(String, Vec<DVec2>)>, ExportEr
 
 /// Piece system text key of the piece name.
 const PIECE_NAME: &str = "Piece Name:";
+/// The annotation of a piece that stands for a mirror pair
+/// ([`PatternPiece::cut_pair`]): cut one right side up and one mirrored.
+pub const CUT_PAIR: &str = "Annotation: cut pair (one mirrored)";
 
 /// `s` without `prefix` (ASCII case-insensitive), if it starts with it.
 fn strip_prefix_ignore_case<'a>(s: &'a str, prefix: &str) -> Option<&'a str> {
@@ -310,9 +335,15 @@ fn write(
     let text_box = Bounds::of([DVec2::new(0.0, top), style_at(style_text.len().saturating_sub(1))]);
     let extents = Bounds::union_opt(placed, text_box).unwrap_or(Bounds { min: DVec2::ZERO, max: DVec2::ZERO });
 
-    let mut w = Writer { out: String::new(), decimals: opts.decimals };
-    w.header(extents);
-    w.tables(opts.text_height_mm);
+    let gerber = opts.profile == DxfProfile::GerberAccuMark;
+    let mut w = Writer { out: String::new(), decimals: opts.decimals, text_style: !gerber };
+    if gerber {
+        w.section("HEADER");
+        w.end_section();
+    } else {
+        w.header(extents);
+        w.tables(opts.text_height_mm);
+    }
 
     // blocks, and where each is inserted
     w.section("BLOCKS");
@@ -322,7 +353,9 @@ fn write(
         for piece in group {
             let raw = if nested { format!("{}_{}", piece.name, piece.size) } else { piece.name.clone() };
             let name = block_name(&mut used, &raw);
-            w.block(&name, |w| piece_entities(w, piece, rules, opts));
+            // a nest numbers its grade points on the sample size only
+            let numbered = rules.filter(|r| !nested || piece.size == r.base_size);
+            w.block(&name, |w| piece_entities(w, piece, numbered, opts));
             inserts.push((name, shift));
         }
     }
@@ -446,6 +479,8 @@ fn dxf_string(s: &str) -> String {
 struct Writer {
     out: String,
     decimals: usize,
+    /// Name the STANDARD text style on TEXT (not where there is no STYLE table).
+    text_style: bool,
 }
 
 impl Writer {
@@ -567,7 +602,9 @@ impl Writer {
         self.xyz(10, at);
         self.real(40, height);
         self.string(1, value);
-        self.pair(7, "STANDARD");
+        if self.text_style {
+            self.pair(7, "STANDARD");
+        }
     }
 
     /// A `POINT`, with an angle (degrees) for notches.
@@ -677,7 +714,11 @@ fn piece_entities(w: &mut Writer, p: &PatternPiece, rules: Option<&GradeRuleTabl
     // piece system text, centred on the boundary's box
     let pitch = o.text_height_mm * o.line_spacing;
     let centre = Bounds::of(p.cut_line.iter().copied()).map_or(DVec2::ZERO, Bounds::centre);
-    let lines = [format!("{PIECE_NAME} {}", p.name), format!("Size: {}", p.size), format!("Quantity: {}", p.quantity)];
+    let mut lines =
+        vec![format!("{PIECE_NAME} {}", p.name), format!("Size: {}", p.size), format!("Quantity: {}", p.quantity)];
+    if p.cut_pair {
+        lines.push(CUT_PAIR.to_owned());
+    }
     for (i, line) in lines.iter().enumerate() {
         w.text(LAYER_BOUNDARY, centre + DVec2::new(0.0, pitch * (1.0 - i as f64)), o.text_height_mm, line);
     }
@@ -769,6 +810,20 @@ mod tests {
     }
 
     #[test]
+    fn the_gerber_profile_has_an_empty_header_and_no_tables() {
+        let nests = test_pieces::nests();
+        let gerber = DxfOptions { profile: DxfProfile::GerberAccuMark, ..DxfOptions::default() };
+        let bytes = ok(nest_dxf_with_rules("Dress", &nests, &test_pieces::rules(), &gerber));
+        let text = String::from_utf8(bytes.clone()).expect("ASCII");
+        assert!(text.is_ascii());
+        assert!(!text.contains("TABLES") && !text.contains("$ACADVER"), "no TABLES, empty HEADER");
+        assert!(text.starts_with("  0\r\nSECTION\r\n  2\r\nHEADER\r\n  0\r\nENDSEC\r\n"), "{}", &text[..80]);
+        // the same pieces as the AAMA profile, read back
+        let aama = ok(nest_dxf_with_rules("Dress", &nests, &test_pieces::rules(), &DxfOptions::default()));
+        assert_eq!(ok(read_outlines(&bytes)), ok(read_outlines(&aama)));
+    }
+
+    #[test]
     fn nest_has_a_block_per_size_stacked() {
         let nests = test_pieces::nests();
         let bytes = ok(nest_dxf_with_rules("Dress", &nests, &test_pieces::rules(), &DxfOptions::default()));
@@ -786,14 +841,17 @@ mod tests {
             assert!(group.iter().all(|i| i.location == group[0].location), "sizes stacked");
         }
         assert_ne!(inserts[0].location, inserts[3].location);
-        // sizes and rule numbers are there
-        let texts: Vec<String> = blocks[2]
-            .entities
-            .iter()
-            .filter_map(|e| if let EntityType::Text(t) = &e.specific { Some(t.value.clone()) } else { None })
-            .collect();
-        assert!(texts.contains(&"Size: L & XL".to_string()), "{texts:?}");
-        assert!(texts.iter().filter(|t| t.starts_with("# ")).count() >= 5, "{texts:?}");
+        // sizes are there, and rule numbers on the sample size (M) only
+        let texts = |b: &Block| -> Vec<String> {
+            b.entities
+                .iter()
+                .filter_map(|e| if let EntityType::Text(t) = &e.specific { Some(t.value.clone()) } else { None })
+                .collect()
+        };
+        let (sample, other) = (texts(blocks[1]), texts(blocks[2]));
+        assert!(other.contains(&"Size: L & XL".to_string()), "{other:?}");
+        assert!(sample.iter().filter(|t| t.starts_with("# ")).count() >= 5, "{sample:?}");
+        assert!(!other.iter().any(|t| t.starts_with("# ")), "{other:?}");
         let style: Vec<String> = drawing
             .entities()
             .filter_map(|e| if let EntityType::Text(t) = &e.specific { Some(t.value.clone()) } else { None })

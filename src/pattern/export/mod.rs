@@ -322,6 +322,7 @@ pub(crate) mod test_pieces {
             name: name.to_string(),
             size: size.to_string(),
             quantity,
+            cut_pair: false,
             sew_line: sew,
             corners,
             cut_line: cut,

@@ -142,12 +142,36 @@ pub fn pieces_svg(pieces: &[PatternPiece], opts: &SvgOptions) -> String {
         let colours = Colours::plain(opts);
         svg.piece_geometry(piece, t, &colours);
         if let Some(b) = piece_bounds(piece) {
-            let lines = [piece.name.clone(), format!("Size: {}", piece.size), format!("Quantity: {}", piece.quantity)];
+            let mut lines =
+                vec![piece.name.clone(), format!("Size: {}", piece.size), format!("Quantity: {}", piece.quantity)];
+            if piece.cut_pair {
+                lines.push("Cut pair".to_owned());
+            }
             svg.text_block(b.translated(t).centre(), &lines);
         }
         svg.close_group();
     }
     svg.finish()
+}
+
+/// `#rrggbb` of hue `h` (0–1 round the colour wheel) at 65 % saturation and
+/// 42 % lightness (HSL): distinct, print-dark colours for many sizes.
+fn hue(h: f64) -> String {
+    let (s, l) = (0.65, 0.42);
+    let c = (1.0 - (2.0 * l - 1.0f64).abs()) * s;
+    let hp = (h.rem_euclid(1.0)) * 6.0;
+    let x = c * (1.0 - (hp % 2.0 - 1.0).abs());
+    let (r, g, b) = match hp as u32 {
+        0 => (c, x, 0.0),
+        1 => (x, c, 0.0),
+        2 => (0.0, c, x),
+        3 => (0.0, x, c),
+        4 => (x, 0.0, c),
+        _ => (c, 0.0, x),
+    };
+    let m = l - c / 2.0;
+    let byte = |v: f64| ((v + m) * 255.0).round().clamp(0.0, 255.0) as u8;
+    format!("#{:02x}{:02x}{:02x}", byte(r), byte(g), byte(b))
 }
 
 /// The graded nest of a style: for every piece name all its sizes overlaid,
@@ -164,12 +188,15 @@ pub fn nest_svg(style: &str, nests: &[(String, Vec<PatternPiece>)], opts: &SvgOp
             }
         }
     }
+    // one distinct colour per size: the palette, or evenly spaced hues where it is too short
     let colour_of = |size: &str| {
         let i = sizes.iter().position(|s| *s == size).unwrap_or(0);
         if opts.size_colours.is_empty() {
             opts.cut_colour.clone()
+        } else if sizes.len() <= opts.size_colours.len() {
+            opts.size_colours[i].clone()
         } else {
-            opts.size_colours[i % opts.size_colours.len()].clone()
+            hue(i as f64 / sizes.len() as f64)
         }
     };
     let boxes: Vec<Option<Bounds>> =
@@ -208,6 +235,11 @@ pub fn nest_svg(style: &str, nests: &[(String, Vec<PatternPiece>)], opts: &SvgOp
             svg.open_group(&size_id, "size", &piece.size);
             let colours = Colours::single(&colour_of(&piece.size));
             svg.piece_geometry(piece, t, &colours);
+            // the size's label beside its outline's rightmost point
+            if let Some(right) = piece.sew_line.iter().copied().max_by(|a, b| a.x.total_cmp(&b.x)) {
+                let at = right + t + DVec2::new(opts.text_height_mm, 0.0);
+                svg.text_block(at, std::slice::from_ref(&piece.size));
+            }
             svg.close_group();
         }
         if let Some(b) = graded.iter().map(piece_bounds).fold(None, Bounds::union_opt) {
@@ -564,6 +596,13 @@ mod tests {
         let b = boxes[0];
         let width = b.2 - b.0;
         assert!((width - (right - left)).abs() < 1e-3, "true scale: {width} vs {}", right - left);
+    }
+
+    #[test]
+    fn more_sizes_than_the_palette_still_get_distinct_colours() {
+        assert_eq!(hue(0.0), "#b12525");
+        let colours: BTreeSet<String> = (0..12).map(|i| hue(f64::from(i) / 12.0)).collect();
+        assert_eq!(colours.len(), 12);
     }
 
     #[test]

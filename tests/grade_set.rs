@@ -1,0 +1,117 @@
+//! A grade judged as a set (issue #14, items 2–4; `DESIGN.md` §9) on an
+//! evenly stepped chart that is not a fixture body: the men's chart 36–46 in
+//! (2-inch steps, base 42) fitted as one run — the base size fitted, every
+//! other size graded from its body ([`fit_chart`]) — and the skirt and the
+//! trousers graded on every size with the base size's dart plan.
+//!
+//! Bars checked: every chart measurement within 0.5 mm on every size (issue
+//! #2's fit residuals, kept by the graded fit); grade steps regular — each
+//! grade point's step varies by at most max(2 mm, 25 % of its mean step) and
+//! never runs back; mirror pairs cut as one piece on every size. The nest
+//! steps (crossings, points outside the next size and how far) are printed:
+//! issue #14's nest bar is not met yet (see the issue notes).
+
+use grade3d::body::measure::MeasurementId;
+use grade3d::collide::cache::Obstacle;
+use grade3d::collide::render::{GpuContext, RenderOptions};
+use grade3d::geom::winding::{WindingOptions, WindingTree};
+use grade3d::mannequin::fit::{fit_chart, FitOptions};
+use grade3d::mannequin::model::BodyModel;
+use grade3d::mannequin::size_chart::{parse_csv, SizeChartOptions};
+use grade3d::pattern::grade::{grade_rules, nest_steps, nests, step_regularity};
+use grade3d::pattern::piece::PatternPiece;
+use grade3d::pipeline::{grade_with_plan, GradeOptions};
+use grade3d::template::library::builtin;
+
+/// The chart's base (sample) size.
+const BASE: &str = "42";
+
+/// Issue #2's fit bar, kept by the graded fit: every chart measurement, mm.
+const RESIDUAL_MM: f64 = 0.5;
+
+#[test]
+fn an_evenly_stepped_chart_grades_evenly() {
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/size-charts/mens-36-46-in.csv"))
+        .unwrap();
+    let chart = parse_csv(&text, &SizeChartOptions::default()).unwrap();
+    let model = BodyModel::embedded().unwrap();
+    let base = chart.rows.iter().position(|r| r.size == BASE).unwrap();
+    let fits = fit_chart(model, &chart.rows, base, &FitOptions::for_sex(chart.sex)).unwrap();
+    for f in &fits {
+        for (id, r) in &f.residuals {
+            assert!(r.error_mm().abs() <= RESIDUAL_MM, "size {}: {id} off by {:.2} mm", f.size, r.error_mm());
+        }
+    }
+    let gpu = GpuContext::new().expect("wgpu adapter (see .ci/run)");
+    let obstacles: Vec<Obstacle> = fits
+        .iter()
+        .map(|f| Obstacle {
+            maps: gpu.render(&f.body.mesh, &RenderOptions::default()).unwrap(),
+            tree: WindingTree::new(&f.body.mesh, &WindingOptions::default()),
+        })
+        .collect();
+    let hip_steps: Vec<f64> = chart
+        .rows
+        .windows(2)
+        .map(|w| (w[1].targets[&MeasurementId::HipGirth] - w[0].targets[&MeasurementId::HipGirth]) * 1e3)
+        .collect();
+    let mut failures = Vec::new();
+    for t in builtin().unwrap().iter().filter(|t| t.name != "fitted-bodice") {
+        // the base size first: its dart plan (and its cut pairs) go to every other size
+        let base_grade =
+            grade_with_plan(t, &fits[base].body, Some(&obstacles[base]), BASE, &GradeOptions::default(), None).unwrap();
+        let plan = base_grade.pattern.dart_plan.clone();
+        let mut sizes: Vec<(String, Vec<PatternPiece>)> = Vec::new();
+        for (i, f) in fits.iter().enumerate() {
+            let pattern = if i == base {
+                base_grade.pattern.clone()
+            } else {
+                grade_with_plan(t, &f.body, Some(&obstacles[i]), &f.size, &GradeOptions::default(), Some(&plan))
+                    .unwrap_or_else(|e| panic!("{} size {}: {e}", t.name, f.size))
+                    .pattern
+            };
+            assert_eq!(pattern.dart_plan, plan, "{} size {}: the run's plan", t.name, f.size);
+            for pair in &pattern.cut_pairs {
+                let d = pair.difference;
+                eprintln!(
+                    "{} size {}: {:?} mirror within {:.3} % and {:.2} mm",
+                    t.name,
+                    f.size,
+                    pair.panels,
+                    d.area_pct.max(d.width_pct).max(d.height_pct),
+                    d.sew_line_mm
+                );
+                assert!(pair.cut_as_pair, "{} size {}: {:?} not cut as a pair", t.name, f.size, pair.panels);
+            }
+            sizes.push((f.size.clone(), pattern.pieces));
+        }
+        let nest = nests(&sizes).unwrap();
+        for st in nest_steps(&nest) {
+            eprintln!(
+                "{} {} {}→{}: crossings {}, points outside {} (farthest {:.2} mm)",
+                t.name, st.piece, st.smaller, st.larger, st.crossings, st.outside, st.outside_mm
+            );
+        }
+        let rules = grade_rules(&t.name, &sizes, BASE).unwrap();
+        let reg = step_regularity(&rules, Some(&hip_steps));
+        let worst = reg.iter().max_by(|a, b| (a.worst_mm - a.allowed_mm).total_cmp(&(b.worst_mm - b.allowed_mm)));
+        eprintln!(
+            "{}: {} grade points, worst step deviation {}",
+            t.name,
+            reg.len(),
+            worst.map_or(String::new(), |r| format!(
+                "{} {}: {:.2} mm (allowed {:.2})",
+                r.piece, r.label, r.worst_mm, r.allowed_mm
+            ))
+        );
+        for r in &reg {
+            if r.worst_mm > r.allowed_mm || r.sign_changes > 0 {
+                failures.push(format!(
+                    "{} {} {}: steps vary by {:.2} mm (allowed {:.2}), {} run back",
+                    t.name, r.piece, r.label, r.worst_mm, r.allowed_mm, r.sign_changes
+                ));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "grade steps that are not regular:\n{}", failures.join("\n"));
+}
