@@ -12,14 +12,18 @@
 //!   table order. Numbers are written in full (shortest exact form).
 //! - [`rules_rul`]: the `.RUL` text file of the AAMA/ASTM pattern
 //!   interchange, the companion of the DXF ([`super::dxf`]) whose `# n` texts
-//!   name these rules. Header lines `RUL file`, `AUTHOR:`, `PRODUCT:`,
-//!   `VERSION:`, `UNITS: METRIC` (values in mm), `GRADE RULE TABLE:`,
+//!   name these rules. Header lines `ASTM/D6673/RUL` (the first line of
+//!   the files pattern CAD systems write), `AUTHOR:`, `PRODUCT:`,
+//!   `VERSION:`, `CREATION DATE:` and `CREATION TIME:` where
+//!   [`RulOptions::created`] gives them, `UNITS: METRIC` (values in mm),
+//!   `GRADE RULE TABLE:`,
 //!   `NUMBER OF SIZES:`, `SIZE LIST:` (space separated), `SAMPLE SIZE:`; then
 //!   per rule a line `RULE: DELTA n` followed by one line of `dx,dy` pairs,
 //!   one pair per size in size order, separated by spaces; finally `END`. As
 //!   the size list is space separated, whitespace inside a size name is
 //!   written as `_` (in `SIZE LIST` and `SAMPLE SIZE`). No creation date or
-//!   time (determinism).
+//!   time unless given (determinism: the service's artefacts are content
+//!   addressed and `grade3d grade` writes the same bytes).
 //!
 //! # Failure modes
 //!
@@ -45,6 +49,9 @@ pub struct RulOptions {
     pub product: String,
     /// `VERSION:` line. Default: this crate's version.
     pub version: String,
+    /// `CREATION DATE:` and `CREATION TIME:` lines, as given (e.g.
+    /// `("2026-12-02", "16:40:00")`). Default `None`: left out.
+    pub created: Option<(String, String)>,
 }
 
 impl Default for RulOptions {
@@ -54,6 +61,7 @@ impl Default for RulOptions {
             author: "grade3d".to_string(),
             product: "grade3d".to_string(),
             version: env!("CARGO_PKG_VERSION").to_string(),
+            created: None,
         }
     }
 }
@@ -94,10 +102,14 @@ pub fn rules_rul(t: &GradeRuleTable) -> String {
 pub fn rules_rul_with(t: &GradeRuleTable, opts: &RulOptions) -> String {
     let mut out = String::new();
     let sizes: Vec<String> = t.sizes.iter().map(|s| size_token(s)).collect();
-    out.push_str("RUL file\n");
+    out.push_str("ASTM/D6673/RUL\n");
     let _ = writeln!(out, "AUTHOR: {}", one_line(&opts.author));
     let _ = writeln!(out, "PRODUCT: {}", one_line(&opts.product));
     let _ = writeln!(out, "VERSION: {}", one_line(&opts.version));
+    if let Some((date, time)) = &opts.created {
+        let _ = writeln!(out, "CREATION DATE: {}", one_line(date));
+        let _ = writeln!(out, "CREATION TIME: {}", one_line(time));
+    }
     out.push_str("UNITS: METRIC\n");
     let _ = writeln!(out, "GRADE RULE TABLE: {}", one_line(&t.style));
     let _ = writeln!(out, "NUMBER OF SIZES: {}", sizes.len());
@@ -170,7 +182,14 @@ mod tests {
         let t = test_pieces::rules();
         let rul = rules_rul(&t);
         let lines: Vec<&str> = rul.lines().collect();
-        assert_eq!(lines[0], "RUL file");
+        assert_eq!(lines[0], "ASTM/D6673/RUL");
+        assert!(!rul.contains("CREATION"), "no date unless given");
+        let dated = rules_rul_with(
+            &t,
+            &RulOptions { created: Some(("2026-12-02".into(), "16:40:00".into())), ..RulOptions::default() },
+        );
+        assert!(dated.lines().any(|l| l == "CREATION DATE: 2026-12-02"));
+        assert!(dated.lines().any(|l| l == "CREATION TIME: 16:40:00"));
         assert!(lines.contains(&"UNITS: METRIC"));
         assert!(lines.contains(&"GRADE RULE TABLE: Dress, \"summer\""));
         assert!(lines.contains(&"NUMBER OF SIZES: 3"));
