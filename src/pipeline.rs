@@ -28,6 +28,7 @@ use crate::pattern::garment::{pattern_with_plan, DartPlan, GarmentPattern, Patte
 use crate::refine::clear::{clear_coarse, clear_surface, ClearError, ClearOptions};
 use crate::refine::collision::{Collider, CollisionOptions, CollisionReport};
 use crate::refine::subdivide::{refine, relax_tangentially, LevelReport, RefineError, RefineMesh, RefineOptions};
+use crate::refine::symmetry::{symmetrize, SymmetryOptions};
 use crate::template::codec::{decode, CodecError};
 use crate::template::format::Template;
 use crate::template::girth::{expected_ease, ring_curves, ring_loop};
@@ -51,6 +52,9 @@ pub struct GradeOptions {
     pub clear: ClearOptions,
     /// Pattern pieces and flattening (the allowance above overrides its field).
     pub pattern: PatternOptions,
+    /// Mirror symmetry of the surface the pattern is cut from, on a
+    /// symmetric body ([`crate::refine::symmetry`]).
+    pub symmetry: SymmetryOptions,
 }
 
 /// Why a grade failed.
@@ -243,6 +247,9 @@ pub fn grade_with_plan(
 
     let start = Instant::now();
     let cut_from = unlifted.as_deref().unwrap_or(&mesh.positions);
+    // on a symmetric body the surface the pattern is cut from is made exactly symmetric
+    let symmetric = symmetrize(t, body, cut_from, &opts.symmetry);
+    let cut_from = symmetric.as_deref().unwrap_or(cut_from);
     let pattern = pattern_with_plan(t, cut_from, &mesh.triangles, levels, size, &pattern_opts, plan)?;
     let pattern_ms = ms(start);
     let girth_lines = girth_lines(t, body, &decoded, &hung, &mesh);

@@ -102,8 +102,9 @@ pub struct PatternOptions {
     /// grade), its two pieces' sew lines lie within this of each other after
     /// mirroring ([`crate::pattern::grade::mirror_difference`]), mm. Default
     /// 3 (1/8 in, the tolerance a pattern is checked to: on mirror-symmetric
-    /// mannequins the pieces mirror within 0.1–1.8 mm, the collision stage's
-    /// noise; a scan's halves differ by centimetres).
+    /// mannequins the pieces mirror within 0.2 mm once the surface is
+    /// symmetrised, [`crate::refine::symmetry`], and within 3 mm without;
+    /// a scan's halves differ by centimetres).
     pub cut_pair_line_mm: f64,
     /// … and their areas, widths and heights within this, %. Default 1.
     pub cut_pair_extent_pct: f64,

@@ -4,3 +4,4 @@
 pub mod clear;
 pub mod collision;
 pub mod subdivide;
+pub mod symmetry;
