@@ -137,8 +137,7 @@ fn main() {
                     let (p, q) = (a.sew_line[i], a.sew_line[(i + 1) % n]);
                     for j in 0..m {
                         let (r, s) = (b.sew_line[j], b.sew_line[(j + 1) % m]);
-                        let o = |x: glam::DVec2, y: glam::DVec2, z: glam::DVec2| (y - x).perp_dot(z - x);
-                        if o(r, s, p) * o(r, s, q) < 0.0 && o(p, q, r) * o(p, q, s) < 0.0 {
+                        if grade3d::geom::polyline::segments_cross(p, q, r, s) {
                             let g = a
                                 .grade_points
                                 .iter()
@@ -154,16 +153,7 @@ fn main() {
                     .sew_line
                     .iter()
                     .filter(|&&p| !grade3d::geom::polyline::point_in_polygon(&b.sew_line, p))
-                    .map(|&p| {
-                        let d = (0..m)
-                            .map(|j| {
-                                let (r, s) = (b.sew_line[j], b.sew_line[(j + 1) % m]);
-                                let t = ((p - r).dot(s - r) / (s - r).length_squared().max(1e-12)).clamp(0.0, 1.0);
-                                p.distance(r.lerp(s, t))
-                            })
-                            .fold(f64::INFINITY, f64::min);
-                        (d, p)
-                    })
+                    .map(|&p| (grade3d::geom::polyline::distance_to_polygon(&b.sew_line, p), p))
                     .max_by(|x, y| x.0.total_cmp(&y.0));
                 let far = far.map_or(String::new(), |(d, p)| format!("{d:.2} mm at [{:.0},{:.0}]", p.x, p.y));
                 println!("    {piece} {}→{}: farthest outside {far}; {}", a.size, b.size, at.join("; "));

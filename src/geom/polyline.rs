@@ -361,6 +361,31 @@ impl Polyline {
     }
 }
 
+/// Whether segments `pq` and `rs` cross at a point interior to both (strict
+/// orientation signs: touching or collinear overlap is not a crossing).
+pub fn segments_cross(p: DVec2, q: DVec2, r: DVec2, s: DVec2) -> bool {
+    let o = |a: DVec2, b: DVec2, c: DVec2| (b - a).perp_dot(c - a);
+    o(r, s, p) * o(r, s, q) < 0.0 && o(p, q, r) * o(p, q, s) < 0.0
+}
+
+/// Whether segment `pq` properly crosses an edge of the closed polygon `poly`
+/// ([`segments_cross`]).
+pub fn segment_crosses_polygon(p: DVec2, q: DVec2, poly: &[DVec2]) -> bool {
+    let n = poly.len();
+    (0..n).any(|k| segments_cross(p, q, poly[k], poly[(k + 1) % n]))
+}
+
+/// Distance from `p` to the outline of the closed polygon `poly` (infinite
+/// for an empty one).
+pub fn distance_to_polygon(poly: &[DVec2], p: DVec2) -> f64 {
+    (0..poly.len())
+        .map(|i| {
+            let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+            p.distance(a.lerp(b, point_segment(p.extend(0.0), a.extend(0.0), b.extend(0.0))))
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
 /// Even–odd point-in-polygon test in 2D.
 pub fn point_in_polygon(poly: &[DVec2], q: DVec2) -> bool {
     let n = poly.len();

@@ -53,6 +53,7 @@ use serde::{Deserialize, Serialize};
 use super::panels::{Lineage, Panel, SeamChain};
 use super::piece::{GradePoint, GradePointKind, InternalLine, PatternPiece, PieceNotch};
 use crate::body::vocab::{point_def, CurveId, PointId};
+use crate::geom::polyline::segment_crosses_polygon;
 use crate::template::format::Template;
 use crate::template::girth::RING_PLANE_TOLERANCE_M;
 
@@ -244,7 +245,7 @@ pub fn assemble(
         // straight leg would leave the piece (a dart from a concave seam)
         let (Some(&mouth_a), Some(&apex), Some(&mouth_b)) = (d.a.first(), d.a.last(), d.b.first()) else { continue };
         let straight = vec![pts[mouth_a as usize], pts[apex as usize], pts[mouth_b as usize]];
-        let leaves = straight.windows(2).any(|leg| crosses_polygon(leg[0], leg[1], &sew_line));
+        let leaves = straight.windows(2).any(|leg| segment_crosses_polygon(leg[0], leg[1], &sew_line));
         let points = if leaves {
             d.a.iter().chain(d.b.iter().rev().skip(1)).map(|&l| pts[l as usize]).collect()
         } else {
@@ -379,16 +380,6 @@ fn internal_lines(t: &Template, panel: &Panel, lineage: &Lineage, pts: &[DVec2])
         .into_iter()
         .map(|(name, ids)| InternalLine { name, points: ids.iter().map(|&l| pts[l as usize]).collect() })
         .collect()
-}
-
-/// Whether segment `pq` properly crosses an edge of the closed polygon `poly`.
-pub fn crosses_polygon(p: DVec2, q: DVec2, poly: &[DVec2]) -> bool {
-    let o = |a: DVec2, b: DVec2, c: DVec2| (b - a).perp_dot(c - a);
-    let n = poly.len();
-    (0..n).any(|k| {
-        let (r, s) = (poly[k], poly[(k + 1) % n]);
-        o(r, s, p) * o(r, s, q) < 0.0 && o(p, q, r) * o(p, q, s) < 0.0
-    })
 }
 
 /// Signed area of a closed polygon (positive counter-clockwise).

@@ -46,9 +46,10 @@ use std::collections::{BinaryHeap, HashSet};
 use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
-use super::assemble::{crosses_polygon, polyline_length_3d, self_intersects};
+use super::assemble::{polyline_length_3d, self_intersects};
 use super::flatten::{Distortion, Flattening};
 use super::panels::{DartLegs, Panel};
+use crate::geom::polyline::segment_crosses_polygon;
 
 /// Knobs of the dart search.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -265,7 +266,7 @@ fn acceptable(panel: &Panel, trial: &Trial, min_intake: f64) -> Option<f64> {
         // piece (a mouth on a concave seam, the back crotch, puts them outside: a V-slit)
         let (Some(&a), Some(&apex), Some(&b)) = (d.a.first(), d.a.last(), d.b.first()) else { return None };
         let (a, apex, b) = (uv[a as usize], uv[apex as usize], uv[b as usize]);
-        if crosses_polygon(a, apex, &sew) || crosses_polygon(apex, b, &sew) {
+        if segment_crosses_polygon(a, apex, &sew) || segment_crosses_polygon(apex, b, &sew) {
             return None;
         }
         let opening = dart_opening(&rim, uv, d)?;

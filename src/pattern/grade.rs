@@ -23,7 +23,7 @@
 use glam::DVec2;
 
 use super::assemble::signed_area;
-use crate::geom::polyline::{point_in_polygon, point_segment};
+use crate::geom::polyline::{distance_to_polygon, point_in_polygon, segments_cross};
 
 use super::piece::{GradePointKind, GradeRule, GradeRuleTable, PatternPiece, PieceGradeRules};
 
@@ -158,7 +158,7 @@ pub fn nest_steps(nest: &[(String, Vec<PatternPiece>)]) -> Vec<NestStep> {
             for i in 0..a.len() {
                 let (p, q) = (a[i], a[(i + 1) % a.len()]);
                 for j in 0..b.len() {
-                    if properly_cross(p, q, b[j], b[(j + 1) % b.len()]) {
+                    if segments_cross(p, q, b[j], b[(j + 1) % b.len()]) {
                         crossings += 1;
                     }
                 }
@@ -180,24 +180,6 @@ pub fn nest_steps(nest: &[(String, Vec<PatternPiece>)]) -> Vec<NestStep> {
         }
     }
     out
-}
-
-/// Whether segments `pq` and `rs` cross at a point interior to both
-/// (strict orientation signs: touching or collinear overlap is not a crossing).
-fn properly_cross(p: DVec2, q: DVec2, r: DVec2, s: DVec2) -> bool {
-    let o = |a: DVec2, b: DVec2, c: DVec2| (b - a).perp_dot(c - a);
-    let (d1, d2, d3, d4) = (o(r, s, p), o(r, s, q), o(p, q, r), o(p, q, s));
-    d1 * d2 < 0.0 && d3 * d4 < 0.0
-}
-
-/// Distance from `p` to the closed polygon `poly`'s outline.
-fn distance_to_polygon(poly: &[DVec2], p: DVec2) -> f64 {
-    (0..poly.len())
-        .map(|i| {
-            let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
-            p.distance(a.lerp(b, point_segment(p.extend(0.0), a.extend(0.0), b.extend(0.0))))
-        })
-        .fold(f64::INFINITY, f64::min)
 }
 
 /// How regular one grade point's steps are (issue #14, item 4).

@@ -22,7 +22,7 @@ use glam::DVec2;
 use serde::{Deserialize, Serialize};
 
 use super::piece::PatternPiece;
-use crate::geom::polyline::{point_in_polygon, point_segment};
+use crate::geom::polyline::{distance_to_polygon, point_in_polygon, segment_crosses_polygon, segments_cross};
 
 /// A point closer than this to the sew line lies on it, mm (a CAD system's
 /// snap distance; far below a drawn line's width).
@@ -61,21 +61,13 @@ pub enum LineProblem {
 /// Every [`LineProblem`] of `piece`'s internal lines (module docs).
 pub fn line_problems(piece: &PatternPiece) -> Vec<LineProblem> {
     let sew = &piece.sew_line;
-    let n = sew.len();
     let apexes: Vec<DVec2> = piece
         .internal_lines
         .iter()
         .filter(|l| l.name.starts_with("dart") && l.points.len() >= 3)
         .map(|l| l.points[l.points.len() / 2])
         .collect();
-    let to_sew = |p: DVec2| -> f64 {
-        (0..n)
-            .map(|i| {
-                let (a, b) = (sew[i], sew[(i + 1) % n]);
-                p.distance(a.lerp(b, point_segment(p.extend(0.0), a.extend(0.0), b.extend(0.0))))
-            })
-            .fold(f64::INFINITY, f64::min)
-    };
+    let to_sew = |p: DVec2| distance_to_polygon(sew, p);
     let mut out = Vec::new();
     for line in &piece.internal_lines {
         let pts = &line.points;
@@ -87,7 +79,7 @@ pub fn line_problems(piece: &PatternPiece) -> Vec<LineProblem> {
         let segs = pts.len() - 1;
         for i in 0..segs {
             for j in i + 2..segs {
-                if properly_cross(pts[i], pts[i + 1], pts[j], pts[j + 1]) {
+                if segments_cross(pts[i], pts[i + 1], pts[j], pts[j + 1]) {
                     out.push(LineProblem::SelfCrossing { line: name(), segments: [i, j] });
                 }
             }
@@ -99,7 +91,7 @@ pub fn line_problems(piece: &PatternPiece) -> Vec<LineProblem> {
             }
         }
         for i in 0..segs {
-            if (0..n).any(|k| properly_cross(pts[i], pts[i + 1], sew[k], sew[(k + 1) % n])) {
+            if segment_crosses_polygon(pts[i], pts[i + 1], sew) {
                 out.push(LineProblem::OutsidePiece { line: name(), at: i, distance_mm: 0.0 });
             }
         }
@@ -112,13 +104,6 @@ pub fn line_problems(piece: &PatternPiece) -> Vec<LineProblem> {
         }
     }
     out
-}
-
-/// Whether segments `pq` and `rs` cross at a point interior to both.
-fn properly_cross(p: DVec2, q: DVec2, r: DVec2, s: DVec2) -> bool {
-    let o = |a: DVec2, b: DVec2, c: DVec2| (b - a).perp_dot(c - a);
-    let (d1, d2, d3, d4) = (o(r, s, p), o(r, s, q), o(p, q, r), o(p, q, s));
-    d1 * d2 < 0.0 && d3 * d4 < 0.0
 }
 
 #[cfg(test)]
