@@ -12,7 +12,8 @@ use grade3d::geom::mesh::{MeshError, TriMesh};
 use grade3d::geom::polyline::Polyline;
 use grade3d::geom::simplify::{remesh_unrelated, SimplifyOptions};
 use grade3d::mannequin::fit::{fit_size, FitOptions};
-use grade3d::mannequin::model::BodyModel;
+use grade3d::mannequin::landmarks::hm08_landmarks;
+use grade3d::mannequin::model::{BodyModel, MacroParams, MannequinParams};
 use grade3d::mannequin::size_chart::{parse_csv, FigureType, Sex, SexSource, SizeChartError, SizeChartOptions};
 use proptest::prelude::*;
 
@@ -38,6 +39,40 @@ fn every_fixture_point_has_a_sound_frame() {
         }
     }
     eprintln!("smallest |t1·(t2×n)| over all fixtures: {:.3} at {}", worst.0, worst.1);
+}
+
+/// Regression (issue #13): population body 36 (seed 13), a heavy, short,
+/// muscular man, was refused with `degenerate frame at neck_left`
+/// (|t1·(t2×n)| = 0.013): the medial end of MakeHuman's `shoulder-dist`, the
+/// side neck point then, lay on the front of the full trapezius, where the
+/// neck base runs along the shoulder line. The side neck points are now the
+/// neck base's crossings with its coronal plane (`hm08_landmarks`).
+#[test]
+fn side_neck_points_on_a_full_trapezius_have_a_sound_frame() {
+    let model = BodyModel::embedded().unwrap();
+    let params = MannequinParams {
+        macros: MacroParams {
+            gender: 1.0,
+            age: 0.8845606370222278,
+            muscle: 0.9433229434366929,
+            weight: 0.9067075229879981,
+            height: 0.09644097802691187,
+            proportions: 0.5459620630190798,
+            african: 0.06705245925776493,
+            asian: 0.4226676162369004,
+            caucasian: 0.5102799245053347,
+        },
+        modifiers: BTreeMap::new(),
+    };
+    let mesh = model.build(&params).unwrap();
+    let lm = hm08_landmarks(model, &mesh, &Default::default()).unwrap();
+    let opts = DeriveOptions::default();
+    let body = derive_features(mesh, &lm, &opts).unwrap_or_else(|e| panic!("refused: {e}"));
+    for id in [PointId::NeckLeft, PointId::NeckRight] {
+        let t = body.points[&id].frame.triple().abs();
+        eprintln!("{id}: |t1·(t2×n)| = {t:.3}");
+        assert!(t >= opts.min_frame_triple, "{id}: {t:.3}");
+    }
 }
 
 #[test]

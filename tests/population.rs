@@ -60,12 +60,6 @@ const KNOWN_OPEN: &[(&str, &str, &str)] = &[
          of the body's own surface, where no garment surface can pass between the legs",
     ),
     (
-        "",
-        "pop36-",
-        "feature derivation refuses this heavy, short man: the frame at the side neck points is degenerate \
-         (triple product −0.014 and −0.009 against the 0.1 floor), so nothing is graded",
-    ),
-    (
         "straight-skirt",
         "pop27-",
         "as pop09: a slim, short man whose knees stand wider apart in the A-pose than the straight skirt hangs \

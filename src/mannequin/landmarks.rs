@@ -3,11 +3,13 @@
 //! MakeHuman's measurement rings (`measures.json`) are girth lines drawn
 //! on the hm08 topology; they follow the body under every target. From
 //! them, on any hm08 body:
-//! * neck base: the side neck points are the medial end of MakeHuman's
-//!   `shoulder-dist` measure and its mirror; the plane through them that
-//!   contains the lateral axis, tilted forward-down by
-//!   [`Hm08LandmarkOptions::neck_base_tilt_deg`], meets the sagittal plane
-//!   at the front neck point and the cervicale;
+//! * neck base: the plane through the medial end of MakeHuman's
+//!   `shoulder-dist` measure and its mirror that contains the lateral axis,
+//!   tilted forward-down by [`Hm08LandmarkOptions::neck_base_tilt_deg`],
+//!   meets the sagittal plane at the front neck point and the cervicale,
+//!   and the coronal plane through its section's centroid at the side neck
+//!   points (on a full trapezius the measure's end itself slides onto the
+//!   front of the neck, where the neck base runs along the shoulder line);
 //! * girth points: where a ring crosses the sagittal plane x = 0 (front:
 //!   larger z, back: smaller z; moved to the closest point of the sagittal
 //!   section, so that they lie on the surface at x = 0 even across the
@@ -174,6 +176,13 @@ pub fn hm08_landmarks(
     let mid = plane_crossings(&neck, &sagittal);
     lm.points.insert(PointId::NeckFront, extreme(&mid, |p| p.z).ok_or_else(|| err(PointId::NeckFront, "no front"))?);
     lm.points.insert(PointId::NeckBack, extreme(&mid, |p| -p.z).ok_or_else(|| err(PointId::NeckBack, "no back"))?);
+    // the side neck points: where that section meets the coronal plane
+    // through its centroid, as the girths' side points (the medial end of
+    // `shoulder-dist` slides onto the front of a full trapezius: pop36)
+    let coronal = Plane { normal: DVec3::Z, offset: neck.centroid().z };
+    let side = plane_crossings(&neck, &coronal);
+    let nl = extreme(&side, |p| p.x).ok_or_else(|| err(PointId::NeckLeft, "neck base misses its coronal plane"))?;
+    let nr = extreme(&side, |p| -p.x).ok_or_else(|| err(PointId::NeckRight, "neck base misses its coronal plane"))?;
     lm.points.insert(PointId::NeckLeft, nl);
     lm.points.insert(PointId::NeckRight, nr);
     // crotch: lowest vertex on the sagittal plane (mirror of itself)
