@@ -125,6 +125,22 @@ fn main() {
     for st in nest_steps(&nest) {
         println!("  {} {}→{}: crossings {}, outside {}", st.piece, st.smaller, st.larger, st.crossings, st.outside);
     }
+    // CORNER=piece:label: the sew line of every size within 40 mm of that grade point
+    if let Ok(spec) = std::env::var("CORNER") {
+        let (pn, label) = spec.split_once(':').unwrap();
+        for (piece, all) in nest.iter().filter(|(n, _)| n == pn) {
+            for p in all {
+                let g = p.grade_points.iter().find(|g| g.label == label).unwrap();
+                let near: Vec<String> = p
+                    .sew_line
+                    .iter()
+                    .filter(|q| q.distance(g.at) < 40.0)
+                    .map(|q| format!("[{:.1},{:.1}]", q.x, q.y))
+                    .collect();
+                println!("    {piece} {} {label} at [{:.1},{:.1}]: {}", p.size, g.at.x, g.at.y, near.join(" "));
+            }
+        }
+    }
     // NEST_DETAIL=1: where the outlines of consecutive sizes cross, by the nearest grade point
     if std::env::var("NEST_DETAIL").is_ok() {
         for (piece, all) in &nest {

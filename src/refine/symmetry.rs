@@ -114,3 +114,56 @@ pub fn symmetrize(t: &Template, body: &FeatureBody, positions: &[DVec3], opts: &
     }
     Some(out)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::template::library::{builtin, reference_body};
+
+    fn trousers() -> Template {
+        builtin().unwrap().into_iter().find(|t| t.name == "trousers").unwrap()
+    }
+
+    #[test]
+    fn a_planted_asymmetry_is_halved_onto_both_partners() {
+        let body = reference_body().unwrap();
+        let ((n, d), worst) = body_plane(&body).unwrap();
+        assert!(worst < 1e-9, "the reference mannequin mirrors: {worst} m");
+        let mirror = |p: DVec3| p - 2.0 * (n.dot(p) - d) * n;
+        // a grid of points 20 mm apart on the left, their mirror images on the right
+        let left: Vec<DVec3> = (0..6)
+            .flat_map(|i| (0..6).map(move |j| (i, j)))
+            .map(|(i, j)| d * n + n * (0.05 + 0.02 * f64::from(i)) + DVec3::new(0.0, 0.02 * f64::from(j), 0.1))
+            .collect();
+        let mut positions: Vec<DVec3> = left.iter().copied().chain(left.iter().map(|&p| mirror(p))).collect();
+        let planted = DVec3::new(0.001, -0.0015, 0.0005);
+        positions[7] += planted;
+        let out = symmetrize(&trousers(), &body, &positions, &SymmetryOptions::default()).unwrap();
+        let k = left.len();
+        for v in 0..k {
+            assert!(mirror(out[v]).distance(out[v + k]) < 1e-12, "vertex {v} and its partner mirror");
+        }
+        // each of the pair moved by half the asymmetry: p + δ/2 and M(p) + M(δ)/2
+        assert!(out[7].distance(left[7] + 0.5 * planted) < 1e-12);
+        assert!(out[7 + k].distance(mirror(left[7]) + 0.5 * (mirror(planted) - mirror(DVec3::ZERO))) < 1e-12);
+        for v in (0..2 * k).filter(|&v| v != 7 && v != 7 + k) {
+            assert!(out[v].distance(positions[v]) < 1e-12, "vertex {v} was symmetric and stays");
+        }
+    }
+
+    #[test]
+    fn an_asymmetric_body_or_a_garment_without_partners_is_left_alone() {
+        let mut body = reference_body().unwrap();
+        let positions = vec![DVec3::new(0.1, 1.0, 0.1), DVec3::new(-0.1, 1.0, 0.1)];
+        let far = vec![DVec3::new(0.1, 1.0, 0.1), DVec3::new(-0.3, 1.0, 0.1)];
+        let opts = SymmetryOptions::default();
+        assert!(symmetrize(&trousers(), &body, &far, &opts).is_none(), "no partner within 5 mm");
+        let mut skirt = trousers();
+        skirt.mirror_pairs.clear();
+        assert!(symmetrize(&skirt, &body, &positions, &opts).is_none(), "no mirror pairs declared");
+        // a scan: one side's hip point 2 mm off its mirror image
+        let hip = body.points.keys().copied().find(|k| k.as_str() == "hip_left").unwrap();
+        body.points.get_mut(&hip).unwrap().position.y += 0.002;
+        assert!(symmetrize(&trousers(), &body, &positions, &opts).is_none(), "the body does not mirror");
+    }
+}

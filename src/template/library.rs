@@ -460,8 +460,11 @@ pub fn straight_skirt(body: &FeatureBody, o: &SkirtOptions) -> Result<Template, 
     }
     b.orient();
     let cols = |c: [usize; 4]| -> Vec<usize> { c.iter().flat_map(|&i| upper[i].into_iter().chain(lower[i])).collect() };
-    b.panel("front", cols([6, 7, 0, 1]), (waist.nodes[0], hem.nodes[0]));
-    b.panel("back", cols([2, 3, 4, 5]), (waist.nodes[4], hem.nodes[4]));
+    // grain down the centre line below the hip, where the skirt hangs straight; its
+    // upper end, on the hip line, is the stack point: a graded nest grows both ways
+    // from the hip, as a pattern maker stacks a skirt (waist up, hem down)
+    b.panel("front", cols([6, 7, 0, 1]), (hip.nodes[0], hem.nodes[0]));
+    b.panel("back", cols([2, 3, 4, 5]), (hip.nodes[4], hem.nodes[4]));
     b.seam("side_left", "front", "back", vec![waist.nodes[2], hip.nodes[2], hem.nodes[2]]);
     b.seam("side_right", "back", "front", vec![waist.nodes[6], hip.nodes[6], hem.nodes[6]]);
     b.draft.notches = vec![("hip".into(), hip.nodes[2]), ("hip".into(), hip.nodes[6])];
