@@ -33,10 +33,10 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use super::format::{
-    Dart, Edge, Face, GradingDefaults, GrainLine, Hang, Node, Notch, Panel, Relocation, Seam, Template, TemplateError,
-    SCHEMA_ID, SCHEMA_VERSION,
+    Dart, Drop, Edge, Face, GradingDefaults, GrainLine, Hang, Node, Notch, Panel, Relocation, Seam, Template,
+    TemplateError, SCHEMA_ID, SCHEMA_VERSION,
 };
-use super::girth::{place_ring_nodes, refit_rings};
+use super::girth::{girth_plane, place_ring_nodes, refit_rings};
 use super::profile::{Profile, ProfileError};
 use crate::body::feature::FeatureBody;
 use crate::body::vocab::{PointId, VOCABULARY_VERSION};
@@ -129,6 +129,8 @@ pub struct Draft {
     pub notches: Vec<(String, u32)>,
     /// Darts `(name, panel, nodes from the outline to the apex)`.
     pub darts: Vec<(String, String, Vec<u32>)>,
+    /// Nodes that drop from another perpendicular to a girth.
+    pub drops: Vec<Drop>,
     /// Nodes that hang straight between two others.
     pub hangs: Vec<Hang>,
     /// Mirror-pair panels (the template's `mirror_pairs`).
@@ -139,12 +141,13 @@ pub struct Draft {
 
 /// Encodes a draft on its reference body into a template.
 ///
-/// The draft's hangs are applied on the reference body first (nodes moved,
-/// the profiles of their edges relocated by Eq. (5)), so that decoding on
-/// the reference body reproduces the stored nodes.
+/// The draft's drops and hangs are applied on the reference body first
+/// (nodes moved, the profiles of their edges relocated by Eq. (5)), so that
+/// decoding on the reference body reproduces the stored nodes.
 pub fn encode(draft: &Draft, body: &FeatureBody) -> Result<Template, CodecError> {
     let mut hung = draft.clone();
-    let moved = hang(&draft.hangs, body, &mut hung.positions);
+    let mut moved = drop_nodes(&draft.drops, body, &mut hung.positions);
+    moved.extend(hang(&draft.hangs, body, &mut hung.positions));
     if !moved.is_empty() {
         for ((a, b), pts) in &mut hung.profiles {
             if moved.contains(a) || moved.contains(b) {
@@ -265,6 +268,7 @@ pub fn encode(draft: &Draft, body: &FeatureBody) -> Result<Template, CodecError>
         seams,
         notches: draft.notches.iter().map(|(n, v)| Notch { name: n.clone(), node: *v }).collect(),
         darts,
+        drops: draft.drops.clone(),
         hangs: draft.hangs.clone(),
         mirror_pairs: draft.mirror_pairs.clone(),
         defaults: draft.defaults.clone(),
@@ -282,6 +286,35 @@ pub fn encode(draft: &Draft, body: &FeatureBody) -> Result<Template, CodecError>
         }
     }
     Ok(t)
+}
+
+/// Places each dropping node ([`Drop`]; formula there). Returns the nodes
+/// placed; a drop whose girth (or the body's back neck point and crotch,
+/// which say which way is down) the body lacks is left alone.
+pub fn drop_nodes(drops: &[Drop], body: &FeatureBody, positions: &mut [DVec3]) -> Vec<u32> {
+    let mut placed = Vec::new();
+    let (Some(neck), Some(crotch)) = (body.points.get(&PointId::NeckBack), body.points.get(&PointId::Crotch)) else {
+        return placed;
+    };
+    let up_the_body = neck.position - crotch.position;
+    for d in drops {
+        let Some(&from) = positions.get(d.from as usize) else { continue };
+        let Some(plane) = girth_plane(body, d.girth) else { continue };
+        let u = if plane.normal.dot(up_the_body) >= 0.0 { plane.normal } else { -plane.normal };
+        let froms: Vec<DVec3> = drops
+            .iter()
+            .filter(|e| e.girth == d.girth)
+            .filter_map(|e| positions.get(e.from as usize).copied())
+            .collect();
+        let c = froms.iter().copied().sum::<DVec3>() / froms.len().max(1) as f64;
+        let out = from - c;
+        let o = (out - out.dot(u) * u).normalize_or_zero();
+        if let Some(p) = positions.get_mut(d.node as usize) {
+            *p = from - u * d.length_m + o * d.flare_m;
+            placed.push(d.node);
+        }
+    }
+    placed
 }
 
 /// The part of a hang's line a node may move to, as fractions of the line
@@ -352,6 +385,9 @@ pub fn decode(t: &Template, body: &FeatureBody, relocation: Relocation) -> Resul
     let eq1 = relocation == Relocation::Eq1Frame;
     if eq1 {
         place_ring_nodes(t, body, &mut positions);
+    }
+    if eq1 {
+        drop_nodes(&t.drops, body, &mut positions);
     }
     let placed = positions.clone();
     let hung = hang(&t.hangs, body, &mut positions);

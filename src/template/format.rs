@@ -24,7 +24,7 @@ use std::collections::{BTreeMap, BTreeSet};
 
 use serde::{Deserialize, Serialize};
 
-use crate::body::vocab::{PointId, VOCABULARY_VERSION};
+use crate::body::vocab::{CurveId, PointId, VOCABULARY_VERSION};
 
 /// Version of the template schema this build reads and writes.
 pub const SCHEMA_VERSION: u32 = 1;
@@ -157,6 +157,38 @@ pub struct Hang {
     pub lower: u32,
 }
 
+/// A node that drops from another, perpendicular to a girth: cloth falls
+/// from a girth it is held at (a straight skirt's hem from the hip line).
+/// After the ring nodes are placed, the node goes to
+///
+/// ```text
+/// p = p_from − L·u + F·o
+/// ```
+///
+/// `u` the unit normal of the girth's plane pointing up the body (from the
+/// crotch towards the back neck point); `o` the unit direction, within the plane,
+/// from the centre `c` of every drop's `from` on that girth to `p_from`;
+/// `L` [`Drop::length_m`], `F` [`Drop::flare_m`]. Eq. (1) carries a long
+/// offset (35 cm) in its feature point's frame, where a tangent a few
+/// degrees off the vertical moves the hem by centimetres (a short man's
+/// centre back curving under the seat threw the skirt's back hem 13 cm
+/// forward, between his knees: pop09); the girth's plane is that body's own
+/// level. Rotation- and translation-covariant (no world axis).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Drop {
+    /// The node placed.
+    pub node: u32,
+    /// The node it drops from.
+    pub from: u32,
+    /// The girth whose plane it drops perpendicular to.
+    pub girth: CurveId,
+    /// Drop `L` below `from`, m.
+    pub length_m: f64,
+    /// Outward flare `F` beyond `from`, within the girth's plane, m.
+    pub flare_m: f64,
+}
+
 /// Which relocation equation a decode uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -225,6 +257,10 @@ pub struct Template {
     /// Darts.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub darts: Vec<Dart>,
+    /// Nodes that drop from another perpendicular to a girth (applied
+    /// before the hangs).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub drops: Vec<Drop>,
     /// Nodes that hang straight between two others (applied in order).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub hangs: Vec<Hang>,
@@ -527,6 +563,18 @@ impl Template {
                 return Err(bad(format!("edge {e} does not exist")));
             }
         }
+        for d in &self.drops {
+            let bad = |reason: &str| TemplateError::BadReference {
+                element: format!("drop of node {}", d.node),
+                reason: reason.into(),
+            };
+            if [d.node, d.from].iter().any(|&v| v as usize >= self.nodes.len()) || d.node == d.from {
+                return Err(bad("needs two distinct existing nodes"));
+            }
+            if !(d.length_m.is_finite() && d.flare_m.is_finite()) {
+                return Err(bad("length and flare must be finite"));
+            }
+        }
         for h in &self.hangs {
             let ids = [h.node, h.upper, h.lower];
             if ids.iter().any(|&v| v as usize >= self.nodes.len()) || h.node == h.upper || h.node == h.lower {
@@ -627,6 +675,7 @@ mod tests {
             seams: vec![],
             notches: vec![],
             darts: vec![],
+            drops: vec![],
             hangs: vec![],
             mirror_pairs: vec![],
             defaults: GradingDefaults::default(),

@@ -21,7 +21,7 @@ use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
 use super::codec::{encode, CodecError, Draft, DraftPanel, DraftSeam};
-use super::format::{Hang, Template, TemplateError};
+use super::format::{Drop, Hang, Template, TemplateError};
 use super::girth;
 use crate::body::derive::{derive_features, DeriveOptions, FeatureError};
 use crate::body::feature::FeatureBody;
@@ -420,26 +420,33 @@ fn outer_hull(line: &Polyline, s0: f64, s1: f64, interior: DVec3) -> Polyline {
 /// and back panels, side seams, profiles on the waist opening, hip line,
 /// hem, and on the centre and side lines between waist and hip.
 pub fn straight_skirt(body: &FeatureBody, o: &SkirtOptions) -> Result<Template, AuthorError> {
-    use PointId as P;
     let mut b = Builder::new(body, o.profile_points);
     let waist = b.ring(CurveId::Waist, &WAIST_RING, o.waist_ease_mm)?;
     let hip = b.ring(CurveId::Hip, &HIP_RING, o.hip_ease_mm)?;
-    let hip_c = hip.curve.centroid();
+    // Hem nodes drop 35 cm below the hip nodes, perpendicular to the hip
+    // girth's plane, and flare outwards within it ([`Drop`]): as decoding
+    // places them, so that decode ∘ encode is exact here. (Tied by Eq. (1)
+    // to hip points, a 35 cm offset along a tangent a few degrees off the
+    // vertical threw the hem by centimetres on other bodies.)
+    let plane = girth::girth_plane(body, CurveId::Hip).ok_or_else(|| AuthorError::Missing("hip".into()))?;
+    let up_the_body = body.points.get(&PointId::NeckBack).zip(body.points.get(&PointId::Crotch));
+    let up_the_body = up_the_body.map(|(n, c)| n.position - c.position).unwrap_or(DVec3::Y);
+    let up = if plane.normal.dot(up_the_body) >= 0.0 { plane.normal } else { -plane.normal };
+    let hip_c = hip.nodes.iter().map(|&v| b.draft.positions[v as usize]).sum::<DVec3>() / hip.nodes.len() as f64;
+    let (length, flare) = (o.length_below_hip_m, o.hem_flare_mm * MM);
     let hem_of = |p: DVec3| -> DVec3 {
-        let out = DVec3::new(p.x - hip_c.x, 0.0, p.z - hip_c.z).normalize_or_zero();
-        p - DVec3::Y * o.length_below_hip_m + out * (o.hem_flare_mm * MM)
+        let out = p - hip_c;
+        p - up * length + (out - out.dot(up) * up).normalize_or_zero() * flare
     };
-    // Hem nodes hang 35 cm below the hip line: tied to the hip's cardinal
-    // points, whose second curves (centre and side lines) run straight
-    // down, so that the long offset along t(f2) stays vertical on every body.
-    let cardinal = [P::HipFront, P::HipLeft, P::HipBack, P::HipRight];
     let hem_nodes: Vec<u32> = hip
         .nodes
         .iter()
-        .enumerate()
-        .map(|(k, &v)| {
+        .zip(HIP_RING)
+        .map(|(&v, point)| {
             let p = b.draft.positions[v as usize];
-            b.node(hem_of(p), Some(cardinal[k / 2]))
+            let node = b.node(hem_of(p), Some(point));
+            b.draft.drops.push(Drop { node, from: v, girth: CurveId::Hip, length_m: length, flare_m: flare });
+            node
         })
         .collect();
     for i in 0..8 {
@@ -476,7 +483,7 @@ pub fn straight_skirt(body: &FeatureBody, o: &SkirtOptions) -> Result<Template, 
             .map(|&(name, panel, k)| (format!("dart_{name}"), panel.to_string(), vec![waist.nodes[k], hip.nodes[k]]))
             .collect();
     b.draft.name = "straight-skirt".into();
-    b.draft.version = 1;
+    b.draft.version = 2;
     b.draft.description = "Straight skirt with a slight hem flare: waistband line, hip line and hem; front and back \
                            panels joined by side seams."
         .into();
