@@ -777,4 +777,26 @@ mod tests {
         t.panels[0].faces.clear();
         assert!(matches!(t.validate(), Err(TemplateError::BadReference { .. })));
     }
+
+    #[test]
+    fn a_drop_round_trips_and_bad_ones_name_the_node() {
+        let mut t = tiny();
+        t.drops.push(Drop { node: 2, from: 0, girth: CurveId::Hip, length_m: 0.35, flare_m: 0.06 });
+        t.validate().unwrap();
+        assert_eq!(Template::from_json(&t.to_json()).unwrap(), t, "drops pass the schema and round-trip");
+        for bad in [
+            Drop { node: 7, from: 0, girth: CurveId::Hip, length_m: 0.35, flare_m: 0.0 },
+            Drop { node: 1, from: 1, girth: CurveId::Hip, length_m: 0.35, flare_m: 0.0 },
+            Drop { node: 1, from: 0, girth: CurveId::Hip, length_m: f64::NAN, flare_m: 0.0 },
+        ] {
+            let mut t = tiny();
+            t.drops.push(bad);
+            match t.validate() {
+                Err(TemplateError::BadReference { element, .. }) => {
+                    assert_eq!(element, format!("drop of node {}", bad.node));
+                }
+                other => panic!("{bad:?}: {other:?}"),
+            }
+        }
+    }
 }
