@@ -39,7 +39,7 @@ use super::format::{
 use super::girth::{girth_plane, place_ring_nodes, refit_rings};
 use super::profile::{Profile, ProfileError};
 use crate::body::feature::FeatureBody;
-use crate::body::vocab::{PointId, VOCABULARY_VERSION};
+use crate::body::vocab::{CurveId, PointId, VOCABULARY_VERSION};
 
 /// Why encoding or decoding failed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -288,30 +288,40 @@ pub fn encode(draft: &Draft, body: &FeatureBody) -> Result<Template, CodecError>
     Ok(t)
 }
 
-/// Places each dropping node ([`Drop`]; formula there). Returns the nodes
-/// placed; a drop whose girth (or the body's back neck point and crotch,
-/// which say which way is down) the body lacks is left alone.
+/// The unit normal `u` of `girth`'s plane pointing up the body (from the
+/// crotch towards the back neck point), along which a [`Drop`] falls;
+/// `None` where the body lacks the girth or those points.
+pub fn drop_axis(body: &FeatureBody, girth: CurveId) -> Option<DVec3> {
+    let up_the_body = body.points.get(&PointId::NeckBack)?.position - body.points.get(&PointId::Crotch)?.position;
+    let n = girth_plane(body, girth)?.normal;
+    Some(if n.dot(up_the_body) >= 0.0 { n } else { -n })
+}
+
+/// Where a [`Drop`] of `length` and `flare` (m) from `from` lands:
+/// `from − length·u + flare·o`, `o` the unit direction from `centre` to
+/// `from` within the plane normal to `u`.
+pub fn drop_position(from: DVec3, u: DVec3, centre: DVec3, length: f64, flare: f64) -> DVec3 {
+    let out = from - centre;
+    from - u * length + (out - out.dot(u) * u).normalize_or_zero() * flare
+}
+
+/// Places each dropping node ([`Drop`]; formula there), the centre of each
+/// girth's drops the mean of their `from` nodes. Returns the nodes placed;
+/// a drop whose [`drop_axis`] the body lacks is left alone.
 pub fn drop_nodes(drops: &[Drop], body: &FeatureBody, positions: &mut [DVec3]) -> Vec<u32> {
     let mut placed = Vec::new();
-    let (Some(neck), Some(crotch)) = (body.points.get(&PointId::NeckBack), body.points.get(&PointId::Crotch)) else {
-        return placed;
-    };
-    let up_the_body = neck.position - crotch.position;
-    for d in drops {
-        let Some(&from) = positions.get(d.from as usize) else { continue };
-        let Some(plane) = girth_plane(body, d.girth) else { continue };
-        let u = if plane.normal.dot(up_the_body) >= 0.0 { plane.normal } else { -plane.normal };
-        let froms: Vec<DVec3> = drops
-            .iter()
-            .filter(|e| e.girth == d.girth)
-            .filter_map(|e| positions.get(e.from as usize).copied())
-            .collect();
-        let c = froms.iter().copied().sum::<DVec3>() / froms.len().max(1) as f64;
-        let out = from - c;
-        let o = (out - out.dot(u) * u).normalize_or_zero();
-        if let Some(p) = positions.get_mut(d.node as usize) {
-            *p = from - u * d.length_m + o * d.flare_m;
-            placed.push(d.node);
+    let girths: std::collections::BTreeSet<CurveId> = drops.iter().map(|d| d.girth).collect();
+    for girth in girths {
+        let Some(u) = drop_axis(body, girth) else { continue };
+        let ours: Vec<&Drop> = drops.iter().filter(|d| d.girth == girth).collect();
+        let froms: Vec<DVec3> = ours.iter().filter_map(|d| positions.get(d.from as usize).copied()).collect();
+        let centre = froms.iter().copied().sum::<DVec3>() / froms.len().max(1) as f64;
+        for d in ours {
+            let Some(&from) = positions.get(d.from as usize) else { continue };
+            if let Some(p) = positions.get_mut(d.node as usize) {
+                *p = drop_position(from, u, centre, d.length_m, d.flare_m);
+                placed.push(d.node);
+            }
         }
     }
     placed
@@ -385,8 +395,6 @@ pub fn decode(t: &Template, body: &FeatureBody, relocation: Relocation) -> Resul
     let eq1 = relocation == Relocation::Eq1Frame;
     if eq1 {
         place_ring_nodes(t, body, &mut positions);
-    }
-    if eq1 {
         drop_nodes(&t.drops, body, &mut positions);
     }
     let placed = positions.clone();

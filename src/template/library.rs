@@ -20,7 +20,7 @@ use std::collections::BTreeMap;
 use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
-use super::codec::{encode, CodecError, Draft, DraftPanel, DraftSeam};
+use super::codec::{drop_axis, drop_position, encode, CodecError, Draft, DraftPanel, DraftSeam};
 use super::format::{Drop, Hang, Template, TemplateError};
 use super::girth;
 use crate::body::derive::{derive_features, DeriveOptions, FeatureError};
@@ -428,16 +428,10 @@ pub fn straight_skirt(body: &FeatureBody, o: &SkirtOptions) -> Result<Template, 
     // places them, so that decode ∘ encode is exact here. (Tied by Eq. (1)
     // to hip points, a 35 cm offset along a tangent a few degrees off the
     // vertical threw the hem by centimetres on other bodies.)
-    let plane = girth::girth_plane(body, CurveId::Hip).ok_or_else(|| AuthorError::Missing("hip".into()))?;
-    let up_the_body = body.points.get(&PointId::NeckBack).zip(body.points.get(&PointId::Crotch));
-    let up_the_body = up_the_body.map(|(n, c)| n.position - c.position).unwrap_or(DVec3::Y);
-    let up = if plane.normal.dot(up_the_body) >= 0.0 { plane.normal } else { -plane.normal };
+    let up = drop_axis(body, CurveId::Hip).ok_or_else(|| AuthorError::Missing("hip".into()))?;
     let hip_c = hip.nodes.iter().map(|&v| b.draft.positions[v as usize]).sum::<DVec3>() / hip.nodes.len() as f64;
     let (length, flare) = (o.length_below_hip_m, o.hem_flare_mm * MM);
-    let hem_of = |p: DVec3| -> DVec3 {
-        let out = p - hip_c;
-        p - up * length + (out - out.dot(up) * up).normalize_or_zero() * flare
-    };
+    let hem_of = |p: DVec3| drop_position(p, up, hip_c, length, flare);
     let hem_nodes: Vec<u32> = hip
         .nodes
         .iter()
