@@ -233,7 +233,14 @@ pub fn grade_with_plan(
             report.coarse = coarse_clear;
             unlifted = opts.clear.pattern_before_lift.then(|| mesh.positions.clone());
             let surface_start = Instant::now();
-            report.surface = clear_surface(&ob.tree, &mut mesh.positions, &mesh.triangles, clearance_mm, &opts.clear);
+            report.surface = clear_surface(
+                &ob.tree,
+                &mut mesh.positions,
+                &mesh.triangles,
+                clearance_mm,
+                body.thigh_contact.as_ref(),
+                &opts.clear,
+            );
             surface_ms = ms(surface_start);
             (mesh, reports, report)
         }

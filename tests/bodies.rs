@@ -75,6 +75,56 @@ fn side_neck_points_on_a_full_trapezius_have_a_sound_frame() {
     }
 }
 
+/// Regression (issue #13): issue #13's population body `pop04-f-heavy-medium`
+/// (a planted extreme: heaviest, oldest, least muscular woman) has thighs
+/// that press into each other below the crotch, and the trousers were left
+/// with 114 intersecting garment/body triangle pairs (62 on its scan-like
+/// copy), all there. No two-legged garment can pass between such thighs
+/// outside the body (`grade3d::body::contact`): the contact must be found,
+/// named in a warning, and it must not be found on bodies whose legs stand
+/// apart (every fixture body).
+#[test]
+fn pressed_thighs_are_found_and_named() {
+    let model = BodyModel::embedded().unwrap();
+    let params = MannequinParams {
+        macros: MacroParams {
+            gender: 0.0,
+            age: 1.0,
+            muscle: 0.0,
+            weight: 1.0,
+            height: 0.5,
+            proportions: 0.0,
+            african: 0.0,
+            asian: 1.0,
+            caucasian: 0.0,
+        },
+        modifiers: BTreeMap::new(),
+    };
+    let mesh = model.build(&params).unwrap();
+    let lm = hm08_landmarks(model, &mesh, &Default::default()).unwrap();
+    let body = derive(mesh, &lm);
+    let c = body.thigh_contact.as_ref().expect("pop04's thighs press together");
+    eprintln!("pop04: {:.1} mm below the crotch, {:.0} mm long", c.depth_below_crotch_mm, c.length_mm);
+    // measured 16.6 mm below the crotch over 122 mm front to back; the
+    // default needs 10 mm (legs standing apart reach at most 4.1 mm)
+    assert!(c.depth_below_crotch_mm > 15.0 && c.depth_below_crotch_mm < 20.0, "{}", c.depth_below_crotch_mm);
+    assert!(c.length_mm > 100.0 && c.length_mm < 150.0, "{}", c.length_mm);
+    let w: Vec<_> = body.warnings.iter().filter(|w| w.code == "thighs-in-contact").collect();
+    assert_eq!(w.len(), 1, "{:?}", body.warnings);
+    assert_eq!(w[0].point, PointId::Crotch);
+    // the contact moves with the body
+    let (r, t) = (glam::DQuat::from_rotation_y(0.7), DVec3::new(0.3, -0.2, 1.1));
+    let moved = body.transformed(r, t).unwrap();
+    let mc = moved.thigh_contact.as_ref().unwrap();
+    let p = c.points[0];
+    assert!(mc.distance(r * p + t) < 1e-12);
+    for (name, mesh, lm) in fixture_bodies() {
+        let body = derive(mesh, &lm);
+        assert_eq!(body.thigh_contact, None, "{name}");
+        assert!(body.warnings.iter().all(|w| w.code != "thighs-in-contact"), "{name}");
+    }
+}
+
 #[test]
 fn degenerate_frame_is_rejected_naming_the_point() {
     let (_, mesh, mut lm) = fixture_bodies().swap_remove(1);

@@ -473,6 +473,7 @@ fn scan_flow_multipart() {
         "{eases:?}"
     );
     assert_eq!(garment["fit"]["penetration"]["intersecting_triangle_pairs"], 0);
+    assert_eq!(garment["fit"]["penetration"]["intersecting_triangle_pairs_at_thigh_contact"], 0);
     assert!(garment["fit"]["penetration"]["deepest_mm"].as_f64().unwrap() <= 1.0);
     let href = j["href"].as_str().unwrap();
     let g = call("GET", &s.url(&format!("{href}/trousers-scan.garment.glb")), &[], None);

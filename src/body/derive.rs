@@ -45,6 +45,7 @@ use std::collections::BTreeMap;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
+use super::contact::{thigh_contact, ContactOptions};
 use super::feature::{FeatureBody, FeatureCurve, FeaturePoint, Frame};
 use super::vocab::{self, CurveId, CurveRule, LoopChoice, Pick, PlaneRule, PointId};
 use crate::geom::mesh::{MeshError, TriMesh};
@@ -132,6 +133,8 @@ pub struct DeriveOptions {
     /// [`Self::min_frame_triple`]) is used with a warning: Eq. (1) offsets
     /// along a nearly flat frame swing far for small changes. Default 0.2.
     pub warn_frame_triple: f64,
+    /// The thigh contact test ([`super::contact`]).
+    pub contact: ContactOptions,
 }
 
 impl Default for DeriveOptions {
@@ -154,6 +157,7 @@ impl Default for DeriveOptions {
             warn_midline_offset_mm: 15.0,
             warn_landmark_offset_mm: 10.0,
             warn_frame_triple: 0.2,
+            contact: ContactOptions::default(),
         }
     }
 }
@@ -163,7 +167,7 @@ impl Default for DeriveOptions {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FeatureWarning {
     /// Kind: `landmark-near-midline-limit`, `landmark-far-from-surface`,
-    /// `frame-nearly-degenerate`.
+    /// `frame-nearly-degenerate`, `thighs-in-contact`.
     pub code: String,
     /// The landmark or feature point.
     pub point: PointId,
@@ -417,7 +421,23 @@ pub fn derive_features(
         }
         points.insert(def.id, FeaturePoint { position, frame, crossing_gap: cross.gap });
     }
-    Ok(FeatureBody { mesh, curves, points, warnings })
+    let thigh_contact = match (midsagittal_plane(&snapped), snapped.get(&PointId::Crotch)) {
+        (Some(plane), Some(&crotch)) => thigh_contact(&mesh, &plane, crotch, &opts.contact),
+        _ => None,
+    };
+    if let Some(c) = &thigh_contact {
+        warnings.push(FeatureWarning {
+            code: "thighs-in-contact".into(),
+            point: PointId::Crotch,
+            detail: format!(
+                "the thighs touch each other (within {} mm) from {:.0} mm below the crotch point down, over {:.0} mm \
+                 front to back: no trouser leg can pass between them outside the body, so garment triangles \
+                 cross the body there (counted apart in the report's penetration)",
+                opts.contact.cloth_gap_mm, c.depth_below_crotch_mm, c.length_mm
+            ),
+        });
+    }
+    Ok(FeatureBody { mesh, curves, points, warnings, thigh_contact })
 }
 
 /// Landmarks that lie on the centre front or centre back line.
@@ -451,19 +471,26 @@ const PAIRS: [(PointId, PointId); 5] = [
 /// landmark given must lie within [`DeriveOptions::max_midline_offset_mm`];
 /// one beyond [`DeriveOptions::warn_midline_offset_mm`] is a warning.
 /// Without a pair there is nothing to check against.
+/// The mid-sagittal plane of the left/right landmark pairs: through the mean
+/// of their midpoints, normal the sum of their right-to-left vectors made
+/// horizontal (up +Y). `None` without a pair, or where they sum to vertical.
+fn midsagittal_plane(snapped: &BTreeMap<PointId, DVec3>) -> Option<Plane> {
+    let pairs: Vec<(DVec3, DVec3)> =
+        PAIRS.iter().filter_map(|(l, r)| Some((*snapped.get(l)?, *snapped.get(r)?))).collect();
+    if pairs.is_empty() {
+        return None;
+    }
+    let mid = pairs.iter().map(|(l, r)| 0.5 * (*l + *r)).sum::<DVec3>() / pairs.len() as f64;
+    let across = pairs.iter().map(|(l, r)| *l - *r).sum::<DVec3>();
+    Plane::from_point_normal(mid, DVec3::new(across.x, 0.0, across.z))
+}
+
 fn check_midline(
     snapped: &BTreeMap<PointId, DVec3>,
     opts: &DeriveOptions,
     warnings: &mut Vec<FeatureWarning>,
 ) -> Result<(), FeatureError> {
-    let pairs: Vec<(DVec3, DVec3)> =
-        PAIRS.iter().filter_map(|(l, r)| Some((*snapped.get(l)?, *snapped.get(r)?))).collect();
-    if pairs.is_empty() {
-        return Ok(());
-    }
-    let mid = pairs.iter().map(|(l, r)| 0.5 * (*l + *r)).sum::<DVec3>() / pairs.len() as f64;
-    let across = pairs.iter().map(|(l, r)| *l - *r).sum::<DVec3>();
-    let Some(plane) = Plane::from_point_normal(mid, DVec3::new(across.x, 0.0, across.z)) else { return Ok(()) };
+    let Some(plane) = midsagittal_plane(snapped) else { return Ok(()) };
     for id in MIDLINE {
         let Some(&p) = snapped.get(&id) else { continue };
         let offset_mm = plane.signed_distance(p).abs() * MM_PER_M;

@@ -89,6 +89,9 @@ pub struct FeatureBody {
     /// What derivation accepted but a person should look at (issue #13,
     /// item 3: a warning where grading can still go on), in the report.
     pub warnings: Vec<super::derive::FeatureWarning>,
+    /// Where the thighs press into each other, if they do
+    /// ([`super::contact`]): garment/body crossings there are unavoidable.
+    pub thigh_contact: Option<super::contact::ThighContact>,
 }
 
 impl FeatureBody {
@@ -118,7 +121,8 @@ impl FeatureBody {
                 (*k, FeaturePoint { position: map(p.position), frame, crossing_gap: p.crossing_gap })
             })
             .collect();
-        Ok(Self { mesh, curves, points, warnings: self.warnings.clone() })
+        let thigh_contact = self.thigh_contact.as_ref().map(|c| c.transformed(map));
+        Ok(Self { mesh, curves, points, warnings: self.warnings.clone(), thigh_contact })
     }
 }
 

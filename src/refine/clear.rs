@@ -74,6 +74,7 @@ use std::collections::BTreeMap;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
+use crate::body::contact::ThighContact;
 use crate::geom::intersect::{count_pairs, intersecting_pairs};
 use crate::geom::winding::WindingTree;
 use crate::template::codec::CoarseMesh;
@@ -172,6 +173,10 @@ pub struct SurfaceClearReport {
     pub lifts: usize,
     /// Intersecting pairs left after the last round.
     pub pairs_after: usize,
+    /// Those of them whose body or garment triangle reaches the body's thigh
+    /// contact ([`ThighContact::reaches`]), where no garment can pass between the
+    /// legs outside the body ([`crate::body::contact`]): unavoidable.
+    pub pairs_after_at_thigh_contact: usize,
     /// Vertices that moved.
     pub vertices_moved: usize,
     /// Largest distance a vertex moved, mm.
@@ -309,12 +314,14 @@ fn fade(need: &mut [f64], ring: &[Vec<u32>], rings: usize, share: f64) {
 
 /// Lifts garment triangles off the body until no garment triangle crosses a
 /// body triangle (module docs). A lifted vertex that lands inside the body
-/// is moved out to `clearance_mm` (the free vertices' clearance).
+/// is moved out to `clearance_mm` (the free vertices' clearance). The pairs
+/// left at `contact`, the body's thigh contact, are counted apart.
 pub fn clear_surface(
     tree: &WindingTree,
     positions: &mut [DVec3],
     triangles: &[[u32; 3]],
     clearance_mm: f64,
+    contact: Option<&ThighContact>,
     opts: &ClearOptions,
 ) -> SurfaceClearReport {
     let c = clearance_mm * 1e-3;
@@ -389,6 +396,11 @@ pub fn clear_surface(
         pairs = intersecting_pairs(tree, positions, triangles);
     }
     report.pairs_after = pairs.len();
+    report.pairs_after_at_thigh_contact = contact.map_or(0, |c| {
+        let garment =
+            |p: &crate::geom::intersect::IntersectingPair| triangles[p.garment as usize].map(|v| positions[v as usize]);
+        pairs.iter().filter(|p| c.reaches(&tree.face_corners(p.body)) || c.reaches(&garment(p))).count()
+    });
     for (p, q) in positions.iter().zip(&start) {
         let d = p.distance(*q) * 1e3;
         if d > 0.0 {
@@ -423,7 +435,7 @@ mod tests {
         let tris: Vec<[u32; 3]> = shell.triangles().iter().map(|t| t.map(|v| v.0)).collect();
         let mut pos = shell.positions().to_vec();
         assert!(pos.iter().all(|p| !tree.is_inside(*p)));
-        let report = clear_surface(&tree, &mut pos, &tris, 3.0, &ClearOptions::default());
+        let report = clear_surface(&tree, &mut pos, &tris, 3.0, None, &ClearOptions::default());
         assert!(report.pairs_before > 0, "{report:?}");
         assert_eq!(report.triangles_before, 20, "every face of the shell chords through: {report:?}");
         assert_eq!(report.pairs_after, 0, "{report:?}");

@@ -394,6 +394,7 @@ fn penetration_report(g: &Graded, body: &FeatureBody, ease_mm: &[f64]) -> serde_
         "deepest_near": nearest,
         "garment_triangles": g.collision.surface.garment_triangles,
         "intersecting_triangle_pairs": g.collision.surface.pairs_after,
+        "intersecting_triangle_pairs_at_thigh_contact": g.collision.surface.pairs_after_at_thigh_contact,
         "intersecting_triangle_pairs_before_clearing": g.collision.surface.pairs_before,
     })
 }
