@@ -471,18 +471,13 @@ const PAIRS: [(PointId, PointId); 5] = [
 /// landmark given must lie within [`DeriveOptions::max_midline_offset_mm`];
 /// one beyond [`DeriveOptions::warn_midline_offset_mm`] is a warning.
 /// Without a pair there is nothing to check against.
-/// The mid-sagittal plane of the left/right landmark pairs: through the mean
-/// of their midpoints, normal the sum of their right-to-left vectors made
-/// horizontal (up +Y). `None` without a pair, or where they sum to vertical.
+/// The mid-sagittal plane of the left/right landmark pairs
+/// ([`Plane::bisecting`], upright: up is +Y). `None` without a pair, or
+/// where they sum to vertical.
 fn midsagittal_plane(snapped: &BTreeMap<PointId, DVec3>) -> Option<Plane> {
     let pairs: Vec<(DVec3, DVec3)> =
         PAIRS.iter().filter_map(|(l, r)| Some((*snapped.get(l)?, *snapped.get(r)?))).collect();
-    if pairs.is_empty() {
-        return None;
-    }
-    let mid = pairs.iter().map(|(l, r)| 0.5 * (*l + *r)).sum::<DVec3>() / pairs.len() as f64;
-    let across = pairs.iter().map(|(l, r)| *l - *r).sum::<DVec3>();
-    Plane::from_point_normal(mid, DVec3::new(across.x, 0.0, across.z))
+    Plane::bisecting(&pairs, Some(DVec3::Y))
 }
 
 fn check_midline(

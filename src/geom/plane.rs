@@ -67,6 +67,29 @@ impl Plane {
         (u, v)
     }
 
+    /// The plane that mirrors each left point `l` of `pairs` `(l, r)` onto
+    /// its right point `r`, in the mean: normal
+    ///
+    /// ```text
+    /// n = Σ (l − r) / |Σ (l − r)|,   made perpendicular to `upright` first where given
+    /// d = (1/k) Σ n·(l + r)/2
+    /// ```
+    ///
+    /// (a body's or garment's mid-sagittal plane from its left/right
+    /// feature points or nodes; `upright` the body's up, for a plane that
+    /// stands upright whatever the pairs' heights). Exact for pairs that
+    /// mirror across one plane. `None` without pairs, or where the `l − r`
+    /// cancel (or lie along `upright`).
+    pub fn bisecting(pairs: &[(DVec3, DVec3)], upright: Option<DVec3>) -> Option<Self> {
+        let mut across = pairs.iter().map(|(l, r)| *l - *r).sum::<DVec3>();
+        if let Some(up) = upright.and_then(DVec3::try_normalize) {
+            across -= across.dot(up) * up;
+        }
+        let n = across.try_normalize()?;
+        let d = pairs.iter().map(|(l, r)| n.dot(0.5 * (*l + *r))).sum::<f64>() / pairs.len() as f64;
+        Some(Self { normal: n, offset: d })
+    }
+
     /// Total-least-squares plane through the points; `None` if fewer than
     /// three points or they are (numerically) collinear.
     pub fn fit(points: &[DVec3]) -> Option<Self> {
@@ -139,6 +162,25 @@ pub fn symmetric_eigen(m: DMat3) -> ([f64; 3], [DVec3; 3]) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn bisecting_recovers_a_planted_mirror_plane() {
+        let plane = Plane::from_point_normal(DVec3::new(0.02, 1.0, -0.01), DVec3::new(1.0, 0.05, 0.1)).unwrap();
+        let mirror = |p: DVec3| p - 2.0 * plane.signed_distance(p) * plane.normal;
+        let left: Vec<DVec3> =
+            (0..7).map(|i| DVec3::new(0.2 + 0.01 * f64::from(i), 0.3 * f64::from(i), 0.05)).collect();
+        let pairs: Vec<(DVec3, DVec3)> = left.iter().map(|&l| (l, mirror(l))).collect();
+        let b = Plane::bisecting(&pairs, None).unwrap();
+        assert!((b.normal - plane.normal).length() < 1e-12, "{b:?}");
+        assert!((b.offset - plane.offset).abs() < 1e-12, "{b:?}");
+        // upright: the normal loses its vertical part
+        let u = Plane::bisecting(&pairs, Some(DVec3::Y)).unwrap();
+        assert!(u.normal.y.abs() < 1e-15 && (u.normal.length() - 1.0).abs() < 1e-12, "{u:?}");
+        assert_eq!(Plane::bisecting(&[], None), None);
+        let cancel = [(DVec3::X, DVec3::ZERO), (DVec3::ZERO, DVec3::X)];
+        assert_eq!(Plane::bisecting(&cancel, None), None);
+        assert_eq!(Plane::bisecting(&[(DVec3::Y, DVec3::ZERO)], Some(DVec3::Y)), None);
+    }
 
     #[test]
     fn fit_recovers_planted_plane() {

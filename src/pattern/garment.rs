@@ -61,6 +61,7 @@ use super::flatten::{distortion, flatten_with_sewn_lengths, Distortion, FlattenE
 use super::grade::{mirror_difference, MirrorDifference};
 use super::panels::{cut, Panel, PanelError, SeamChain};
 use super::piece::PatternPiece;
+use crate::geom::plane::Plane;
 use crate::template::format::Template;
 
 /// Knobs of the pattern stage.
@@ -784,9 +785,7 @@ fn mirror_plane(t: &Template, positions: &[DVec3]) -> Option<(DVec3, f64)> {
             pairs.push((*positions.get(i)?, *positions.get(j)?));
         }
     }
-    let n = pairs.iter().map(|(l, r)| *l - *r).sum::<DVec3>().try_normalize()?;
-    let d = pairs.iter().map(|(l, r)| n.dot(0.5 * (*l + *r))).sum::<f64>() / pairs.len() as f64;
-    Some((n, d))
+    Plane::bisecting(&pairs, None).map(|p| (p.normal, p.offset))
 }
 
 /// `first`'s found darts mirrored across `plane` onto `second` (its mirror

@@ -32,6 +32,7 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use crate::body::feature::FeatureBody;
+use crate::geom::plane::Plane;
 use crate::template::format::Template;
 
 /// Passes at most: where the asymmetry rivals the vertex spacing (small
@@ -72,8 +73,7 @@ fn body_plane(body: &FeatureBody) -> Option<((DVec3, f64), f64)> {
             pairs.push((p.position, q.position));
         }
     }
-    let n = pairs.iter().map(|(l, r)| *l - *r).sum::<DVec3>().try_normalize()?;
-    let d = pairs.iter().map(|(l, r)| n.dot(0.5 * (*l + *r))).sum::<f64>() / pairs.len() as f64;
+    let Plane { normal: n, offset: d } = Plane::bisecting(&pairs, None)?;
     let mirror = |p: DVec3| p - 2.0 * (n.dot(p) - d) * n;
     let worst = pairs.iter().map(|(l, r)| mirror(*l).distance(*r)).fold(0.0, f64::max);
     Some(((n, d), worst))
