@@ -57,7 +57,9 @@
 //! vertices that land inside another body part are settled by the exact
 //! inside test. Rounds repeat until no pair is left or
 //! [`ClearOptions::max_rounds`] is reached; the report says how many pairs
-//! remain (the tests require none).
+//! remain, and how many of them lie at the body's thigh contact, where no
+//! two-legged garment can pass between the legs outside the body
+//! ([`crate::body::contact`]); the tests require none elsewhere.
 //!
 //! The pattern is cut from the surface before this lifting
 //! ([`ClearOptions::pattern_before_lift`]): a lift is a bump of a few
