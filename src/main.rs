@@ -95,6 +95,12 @@ struct GradeArgs {
     /// Output folder (created; existing files of the same names are replaced).
     #[arg(long)]
     out: PathBuf,
+    /// Creation date and time written into the `.RUL` files, RFC 3339
+    /// (`2026-12-03T14:05:00Z`). Default: `SOURCE_DATE_EPOCH` (seconds since
+    /// 1970, the reproducible-builds convention) where set, else now. The
+    /// service's `created` gives the same bytes for the same stamp.
+    #[arg(long)]
+    created: Option<String>,
 }
 
 /// Bad input to a command: exit code 2.
@@ -265,6 +271,24 @@ fn write_fixtures(dir: &std::path::Path) -> Result<(), Box<dyn std::error::Error
     Ok(())
 }
 
+/// The `.RUL` creation stamp of `grade3d grade`: `--created`, else
+/// `SOURCE_DATE_EPOCH`, else the time now; a message naming the bad one.
+fn creation_stamp(given: Option<&str>) -> Result<grade3d::pattern::export::rul::Created, String> {
+    use grade3d::pattern::export::rul::Created;
+    if let Some(text) = given {
+        return Created::from_rfc3339(text).map_err(|e| format!("--created: {e}"));
+    }
+    if let Ok(epoch) = std::env::var("SOURCE_DATE_EPOCH") {
+        let secs: i64 = epoch
+            .trim()
+            .parse()
+            .map_err(|_| format!("SOURCE_DATE_EPOCH: `{epoch}` is not whole seconds since 1970"))?;
+        return Created::from_unix(secs).map_err(|e| format!("SOURCE_DATE_EPOCH: {e}"));
+    }
+    let now = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_err(|e| e.to_string())?;
+    Created::from_unix(i64::try_from(now.as_secs()).unwrap_or(i64::MAX)).map_err(|e| e.to_string())
+}
+
 /// `grade3d grade` (see [`GradeArgs`]): the service's flows
 /// (`grade3d::service::work`) run here, their artefacts written to `--out`.
 fn grade_offline(args: &GradeArgs) -> Result<(), Box<dyn std::error::Error>> {
@@ -329,6 +353,7 @@ fn grade_offline(args: &GradeArgs) -> Result<(), Box<dyn std::error::Error>> {
             m.into()
         }
     };
+    let created = Some(creation_stamp(args.created.as_deref()).map_err(bad)?);
     let outcome = if let Some(chart_path) = &args.chart {
         let mut opts = size_chart::SizeChartOptions::default();
         match args.figure.as_deref() {
@@ -339,7 +364,7 @@ fn grade_offline(args: &GradeArgs) -> Result<(), Box<dyn std::error::Error>> {
         }
         let t = text(chart_path)?;
         let chart = size_chart::parse_text(&t, &opts).map_err(|e| bad(format!("{}: {e}", chart_path.display())))?;
-        work::size_chart(&ctx, &templates, &chart, args.base_size.as_deref(), &progress)
+        work::size_chart(&ctx, &templates, &chart, args.base_size.as_deref(), created, &progress)
             .map_err(|e| fail(e, chart_path))?
     } else {
         if args.landmarks.len() != args.scan.len() {
@@ -362,7 +387,8 @@ fn grade_offline(args: &GradeArgs) -> Result<(), Box<dyn std::error::Error>> {
         let inputs: Vec<BodyInput<'_>> =
             bodies.iter().map(|(n, g, l, _)| BodyInput { name: n, glb: g, landmarks: l }).collect();
         let first = args.scan.first().cloned().unwrap_or_default();
-        work::bodies(&ctx, &templates, &inputs, args.base_size.as_deref(), &progress).map_err(|e| fail(e, &first))?
+        work::bodies(&ctx, &templates, &inputs, args.base_size.as_deref(), created, &progress)
+            .map_err(|e| fail(e, &first))?
     };
     bar.finish_and_clear();
     std::fs::create_dir_all(&args.out).map_err(|e| bad(format!("{}: {e}", args.out.display())))?;

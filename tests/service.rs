@@ -325,7 +325,7 @@ fn grade_command_writes_the_services_artefacts() {
     let csv = "size,unit,bust_girth,waist_girth_curvy,hip_girth\n8,in,35.5,28.375,38\n10,in,36.5,29.375,39\n";
     let r = call(
         "POST",
-        &s.url("/v1/grade/size-chart?templates=straight-skirt&base_size=8"),
+        &s.url("/v1/grade/size-chart?templates=straight-skirt&base_size=8&created=2026-12-03T14:05:00Z"),
         &[("Content-Type", "text/csv")],
         Some(csv.as_bytes()),
     );
@@ -347,8 +347,17 @@ fn grade_command_writes_the_services_artefacts() {
         "8".as_ref(),
         "--out".as_ref(),
         out.as_os_str(),
+        // the same instant as the service's stamp, written in another offset
+        "--created".as_ref(),
+        "2026-12-03T15:05:00+01:00".as_ref(),
     ]);
     assert!(ok.status.success(), "{}", String::from_utf8_lossy(&ok.stderr));
+    // the RUL header's stamp, in UTC (issue #14 item 6)
+    let rul = std::fs::read_to_string(out.join("straight-skirt.nest.rul")).unwrap();
+    let header: Vec<&str> = rul.lines().take(8).collect();
+    for want in ["ASTM/D6673/RUL", "CREATION DATE: 2026-12-03", "CREATION TIME: 14:05:00", "UNITS: METRIC"] {
+        assert!(header.contains(&want), "{want} missing from {header:?}");
+    }
     let arts = j["artefacts"].as_array().unwrap();
     let written = std::fs::read_dir(&out).unwrap().count();
     assert_eq!(written, arts.len(), "one file per artefact");
@@ -382,6 +391,27 @@ fn grade_command_writes_the_services_artefacts() {
     ]);
     assert_eq!(e.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&e.stderr).contains("chart.csv"), "{}", String::from_utf8_lossy(&e.stderr));
+    // a stamp that is not RFC 3339: exit 2 naming the option, before any work
+    let e = run(&[
+        "--chart".as_ref(),
+        chart.as_os_str(),
+        "--templates".as_ref(),
+        "trousers".as_ref(),
+        "--out".as_ref(),
+        out.as_os_str(),
+        "--created".as_ref(),
+        "yesterday".as_ref(),
+    ]);
+    assert_eq!(e.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&e.stderr).contains("--created"), "{}", String::from_utf8_lossy(&e.stderr));
+    // the service's: a 400 naming the field
+    let r = call(
+        "POST",
+        &s.url("/v1/grade/size-chart?templates=straight-skirt&created=yesterday"),
+        &[("Content-Type", "text/csv")],
+        Some(csv.as_bytes()),
+    );
+    r.problem(400, Some("created"));
 }
 
 #[test]
@@ -524,7 +554,10 @@ fn job_spec_bodies() -> String {
 #[test]
 fn batch_jobs_are_deterministic_and_fail_with_named_fields() {
     let a = Server::start(&temp_dir("jobs-a"), &[]);
-    let spec = format!(r#"{{"templates":["straight-skirt","trousers"],"size_chart":{CHART},"base_size":"M"}}"#);
+    // stamped: the same bytes from two servers, whenever each runs it
+    let spec = format!(
+        r#"{{"templates":["straight-skirt","trousers"],"size_chart":{CHART},"base_size":"M","created":"2026-12-03T14:05:00Z"}}"#
+    );
     let r = call("POST", &a.url("/v1/jobs"), &[json_ct()], Some(spec.as_bytes()));
     assert_eq!(r.status, 202, "{}", r.text());
     let href = r.header("location").unwrap().to_owned();
@@ -560,11 +593,17 @@ fn batch_jobs_are_deterministic_and_fail_with_named_fields() {
         names.contains(&"straight-skirt.nest.dxf") && names.contains(&"straight-skirt-tall.garment.glb"),
         "{names:?}"
     );
+    // not stamped: stamped when it ran
+    let rul = done["artefacts"].as_array().unwrap().iter().find(|a| a["name"] == "straight-skirt.nest.rul").unwrap();
+    let rul = call("GET", &a.url(rul["href"].as_str().unwrap()), &[], None).text();
+    assert!(rul.lines().any(|l| l.starts_with("CREATION DATE: 20")), "{rul}");
     // failures
     let bad = |b: &str| call("POST", &a.url("/v1/jobs"), &[json_ct()], Some(b.as_bytes()));
     bad(&format!(r#"{{"templates":["straight-skirt"],"size_chart":{CHART},"bodies":[{{"name":"x","glb_base64":"","landmarks":{{}}}}]}}"#))
         .problem(400, Some("size_chart"));
     bad(r#"{"templates":["straight-skirt"]}"#).problem(400, Some("size_chart"));
+    bad(&format!(r#"{{"templates":["straight-skirt"],"size_chart":{CHART},"created":"2026-12-03 14:05"}}"#))
+        .problem(400, Some("created"));
     bad(r#"{"templates":["nope"],"size_chart":"size\n"}"#).problem(422, Some("templates"));
     bad(r#"{"templates":["straight-skirt"],"bodies":[{"name":"x","glb_base64":"***","landmarks":{}}]}"#)
         .problem(400, Some("bodies[0].glb_base64"));

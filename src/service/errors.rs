@@ -13,6 +13,7 @@ use crate::io::gltf::GltfError;
 use crate::io::landmarks::LandmarkFileError;
 use crate::mannequin::fit::FitError;
 use crate::mannequin::size_chart::SizeChartError;
+use crate::pattern::export::rul::CreatedError;
 use crate::pipeline::PipelineError;
 use crate::template::format::TemplateError;
 
@@ -73,6 +74,14 @@ pub fn chart_problem(e: &SizeChartError) -> Problem {
         SizeChartError::UnknownSex { .. } => "chart-unknown-sex",
     };
     Problem::bad_request(slug, e.to_string()).field("chart")
+}
+
+/// The problem of a `created` stamp that cannot be read (400, field `created`).
+pub fn created_problem(e: &CreatedError) -> Problem {
+    let slug = match e {
+        CreatedError::NotRfc3339 { .. } | CreatedError::OutOfRange(_) => "invalid-created",
+    };
+    Problem::bad_request(slug, e.to_string()).field("created")
 }
 
 fn gltf_problem(e: &GltfError, field: &str, detail: String) -> Problem {

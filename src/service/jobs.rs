@@ -48,6 +48,9 @@ pub struct JobSpec {
     /// Base size of the grade rules.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub base_size: Option<String>,
+    /// The `.RUL` files' creation stamp, RFC 3339 (default: when the job runs).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub created: Option<String>,
 }
 
 /// Where a job is.
@@ -209,8 +212,13 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("grade3d-jobs-{}", std::process::id()));
         let path = dir.join("jobs.redb");
         let _ = std::fs::remove_file(&path);
-        let spec =
-            JobSpec { templates: vec!["straight-skirt".into()], size_chart: None, bodies: vec![], base_size: None };
+        let spec = JobSpec {
+            templates: vec!["straight-skirt".into()],
+            size_chart: None,
+            bodies: vec![],
+            base_size: None,
+            created: None,
+        };
         let mut r = JobRecord {
             id: "abc".into(),
             spec,

@@ -28,6 +28,7 @@ use serde::{Deserialize, Serialize};
 use crate::collide::cache::{ObstacleCache, ObstacleCacheOptions};
 use crate::collide::render::GpuContext;
 use crate::mannequin::size_chart::{parse_csv, parse_json, FigureType, SizeChart, SizeChartOptions};
+use crate::pattern::export::rul::Created;
 use crate::template::format::Template;
 
 pub mod errors;
@@ -584,6 +585,8 @@ struct SizeChartRequest {
     base_size: Option<String>,
     #[serde(default)]
     figure: Option<FigureType>,
+    #[serde(default)]
+    created: Option<String>,
 }
 
 /// Query of `POST /v1/grade/size-chart` with a CSV body.
@@ -593,6 +596,26 @@ struct SizeChartQuery {
     templates: Option<String>,
     base_size: Option<String>,
     figure: Option<FigureType>,
+    created: Option<String>,
+}
+
+/// The `.RUL` creation stamp of a flow: the request's `created` (RFC 3339),
+/// read now so that a bad one is a 400 before any work; `None` when not
+/// given (the flow is stamped when it runs, [`stamp_now`]).
+fn parse_created(created: Option<&str>) -> Result<Option<Created>, Problem> {
+    created.map(Created::from_rfc3339).transpose().map_err(|e| errors::created_problem(&e))
+}
+
+/// `given`, else the time now (UTC, whole seconds): when the result is
+/// computed. A result is content addressed by its input, the given stamp
+/// included, so a cached result keeps the stamp of its computation.
+fn stamp_now(given: Option<Created>) -> Created {
+    given.unwrap_or_else(|| {
+        let secs = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| i64::try_from(d.as_secs()).unwrap_or(i64::MAX));
+        Created::from_unix(secs).unwrap_or(Created::EPOCH)
+    })
 }
 
 fn parse_chart(s: &AppState, chart: &serde_json::Value, figure: Option<FigureType>) -> Result<SizeChart, Problem> {
@@ -640,6 +663,7 @@ async fn grade_size_chart(
             chart: serde_json::Value::String(text.to_owned()),
             base_size: query.base_size,
             figure: query.figure,
+            created: query.created,
         }
     } else if media_is(&headers, "application/json") {
         parse_json_body(&bytes)?
@@ -649,14 +673,19 @@ async fn grade_size_chart(
     let field = "templates";
     let templates = resolve_templates(&s, &req.templates, field)?;
     let chart = parse_chart(&s, &req.chart, req.figure)?;
+    let created = parse_created(req.created.as_deref())?;
     let canonical = serde_json::to_vec(&chart).unwrap_or_default();
-    let mut parts: Vec<&[u8]> = vec![b"size-chart", &canonical, req.base_size.as_deref().unwrap_or("").as_bytes()];
+    let stamp = created.map(|c| c.to_rfc3339()).unwrap_or_default();
+    let mut parts: Vec<&[u8]> =
+        vec![b"size-chart", &canonical, req.base_size.as_deref().unwrap_or("").as_bytes(), stamp.as_bytes()];
     parts.extend(templates.iter().map(|(_, json, _)| json.as_bytes()));
     let id = content_id(&parts);
     let base = req.base_size.clone();
     let ts: Vec<Template> = templates.into_iter().map(|(_, _, t)| t).collect();
-    run_flow(&s, id, "size-chart", None, move |ctx| work::size_chart(ctx, &ts, &chart, base.as_deref(), &|_, _, _| {}))
-        .await
+    run_flow(&s, id, "size-chart", None, move |ctx| {
+        work::size_chart(ctx, &ts, &chart, base.as_deref(), Some(stamp_now(created)), &|_, _, _| {})
+    })
+    .await
 }
 
 fn unsupported_media(what: &str) -> Problem {
@@ -811,6 +840,7 @@ async fn submit_job(
     }
     let bytes = body_bytes(&s, &headers, body).await?;
     let spec: JobSpec = parse_json_body(&bytes)?;
+    parse_created(spec.created.as_deref())?;
     let templates = resolve_templates(&s, &spec.templates, "templates")?;
     match (&spec.size_chart, spec.bodies.is_empty()) {
         (Some(chart), true) => {
@@ -938,9 +968,10 @@ fn run_job_work(s: &AppState, r: &JobRecord) -> Result<Outcome, Problem> {
     let progress = move |stage: &str, done: usize, total: usize| {
         s.0.progress.lock().unwrap_or_else(|p| p.into_inner()).insert(id.clone(), (stage.to_owned(), done, total));
     };
+    let created = stamp_now(parse_created(r.spec.created.as_deref())?);
     let outcome = if let Some(chart) = &r.spec.size_chart {
         let chart = parse_chart(s, chart, None)?;
-        work::size_chart(&ctx, &templates, &chart, r.spec.base_size.as_deref(), &progress)?
+        work::size_chart(&ctx, &templates, &chart, r.spec.base_size.as_deref(), Some(created), &progress)?
     } else {
         let mut decoded = Vec::new();
         for b in &r.spec.bodies {
@@ -951,7 +982,7 @@ fn run_job_work(s: &AppState, r: &JobRecord) -> Result<Outcome, Problem> {
         }
         let inputs: Vec<BodyInput<'_>> =
             decoded.iter().map(|(n, g, l)| BodyInput { name: n, glb: g, landmarks: l }).collect();
-        work::bodies(&ctx, &templates, &inputs, r.spec.base_size.as_deref(), &progress)?
+        work::bodies(&ctx, &templates, &inputs, r.spec.base_size.as_deref(), Some(created), &progress)?
     };
     Ok(outcome)
 }

@@ -38,7 +38,8 @@ use crate::io::landmarks::{parse_landmarks, LandmarkFileError};
 use crate::mannequin::fit::{fit_graded, fit_size, FitError, FitOptions, FittedMannequin};
 use crate::mannequin::model::{BodyModel, MannequinError};
 use crate::mannequin::size_chart::{Sex, SizeChart};
-use crate::pattern::export::{dxf, rul, svg, ExportError};
+use crate::pattern::export::rul::{self, Created};
+use crate::pattern::export::{dxf, svg, ExportError};
 use crate::pattern::garment::DartPlan;
 use crate::pattern::grade::{grade_rules, nests, GradeError};
 use crate::pattern::piece::PatternPiece;
@@ -420,6 +421,7 @@ fn graded_nest(
     template: &str,
     sizes: &[(String, Vec<PatternPiece>)],
     base: &str,
+    created: Option<Created>,
     out: &mut Vec<Artefact>,
 ) -> Result<(), WorkError> {
     let nest_err = |source| WorkError::Nest { template: template.to_owned(), source };
@@ -449,7 +451,7 @@ fn graded_nest(
         // named after the nest DXF whose `# n` texts it numbers, as CAD systems pair them
         name: format!("{template}.nest.rul"),
         media_type: "text/plain",
-        bytes: rul::rules_rul(&rules).into_bytes(),
+        bytes: rul::rules_rul_with(&rules, &rul::RulOptions { created, ..Default::default() }).into_bytes(),
     });
     Ok(())
 }
@@ -476,12 +478,13 @@ fn graded_nests(
     templates: &[Template],
     per_template: &[Vec<(String, Vec<PatternPiece>)>],
     base: &str,
+    created: Option<Created>,
     timer: &mut Timer,
     out: &mut Vec<Artefact>,
 ) -> Result<(), WorkError> {
     let start = Instant::now();
     for (t, sizes) in templates.iter().zip(per_template) {
-        graded_nest(&t.name, sizes, base, out)?;
+        graded_nest(&t.name, sizes, base, created, out)?;
     }
     timer.add(stage::EXPORT, start);
     Ok(())
@@ -494,7 +497,8 @@ fn finish(report: serde_json::Value, mut artefacts: Vec<Artefact>, timer: Timer)
 }
 
 /// The size-chart flow (module docs). `base` is the grade rules' base size
-/// (default: the middle row).
+/// (default: the middle row); `created` the `.RUL` files' creation stamp
+/// (none: no date in them).
 ///
 /// # Errors
 /// [`WorkError`].
@@ -503,6 +507,7 @@ pub fn size_chart(
     templates: &[Template],
     chart: &SizeChart,
     base: Option<&str>,
+    created: Option<Created>,
     progress: Progress<'_>,
 ) -> Result<Outcome, WorkError> {
     let base = match base {
@@ -564,7 +569,7 @@ pub fn size_chart(
         sizes.push(serde_json::json!({"size": row.size, "mannequin": mannequin, "garments": garments}));
     }
     progress(stage::EXPORT, total, total);
-    graded_nests(templates, &per_template, &base, &mut timer, &mut artefacts)?;
+    graded_nests(templates, &per_template, &base, created, &mut timer, &mut artefacts)?;
     let report = serde_json::json!({
         "flow": "size-chart",
         "sex": chart.sex,
@@ -580,7 +585,7 @@ pub fn size_chart(
 
 /// Grades every template on every body (scans); with more than one body the
 /// nests and grade rules span the bodies, based on `base` (default: the
-/// first body).
+/// first body), the `.RUL` files stamped `created`.
 ///
 /// # Errors
 /// [`WorkError`].
@@ -589,6 +594,7 @@ pub fn bodies(
     templates: &[Template],
     inputs: &[BodyInput<'_>],
     base: Option<&str>,
+    created: Option<Created>,
     progress: Progress<'_>,
 ) -> Result<Outcome, WorkError> {
     let mut timer = Timer(BTreeMap::new());
@@ -634,7 +640,7 @@ pub fn bodies(
             Some(b) => return Err(WorkError::UnknownBaseSize(b.to_owned())),
             None => inputs[0].name.to_owned(),
         };
-        graded_nests(templates, &per_template, &base, &mut timer, &mut artefacts)?;
+        graded_nests(templates, &per_template, &base, created, &mut timer, &mut artefacts)?;
     }
     progress(stage::EXPORT, total, total);
     let report = serde_json::json!({
@@ -651,5 +657,5 @@ pub fn bodies(
 /// # Errors
 /// [`WorkError`].
 pub fn scan(ctx: &WorkContext, templates: &[Template], input: &BodyInput<'_>) -> Result<Outcome, WorkError> {
-    bodies(ctx, templates, std::slice::from_ref(input), None, &|_, _, _| {})
+    bodies(ctx, templates, std::slice::from_ref(input), None, None, &|_, _, _| {})
 }

@@ -14,16 +14,23 @@
 //!   interchange, the companion of the DXF ([`super::dxf`]) whose `# n` texts
 //!   name these rules. Header lines `ASTM/D6673/RUL` (the first line of
 //!   the files pattern CAD systems write), `AUTHOR:`, `PRODUCT:`,
-//!   `VERSION:`, `CREATION DATE:` and `CREATION TIME:` where
-//!   [`RulOptions::created`] gives them, `UNITS: METRIC` (values in mm),
+//!   `VERSION:`, `CREATION DATE:` (`YYYY-MM-DD`) and `CREATION TIME:`
+//!   (`HH:MM:SS`, UTC) where [`RulOptions::created`] gives them ([`Created`]),
+//!   `UNITS: METRIC` (values in mm),
 //!   `GRADE RULE TABLE:`,
 //!   `NUMBER OF SIZES:`, `SIZE LIST:` (space separated), `SAMPLE SIZE:`; then
 //!   per rule a line `RULE: DELTA n` followed by one line of `dx,dy` pairs,
 //!   one pair per size in size order, separated by spaces; finally `END`. As
 //!   the size list is space separated, whitespace inside a size name is
 //!   written as `_` (in `SIZE LIST` and `SAMPLE SIZE`). No creation date or
-//!   time unless given (determinism: the service's artefacts are content
-//!   addressed and `grade3d grade` writes the same bytes).
+//!   time unless given: this module reads no clock. The shell stamps them
+//!   (the service with the request's `created` or the time it computes the
+//!   result, `grade3d grade` with `--created`, `SOURCE_DATE_EPOCH` or the
+//!   time it runs), so the same input and stamp give the same bytes.
+//!
+//! [`Created::from_rfc3339`] reads a stamp from an RFC 3339 date-time
+//! (any offset, converted to UTC; fractions of a second dropped), and
+//! [`Created::from_unix`] from seconds since 1970-01-01 UTC.
 //!
 //! # Failure modes
 //!
@@ -49,9 +56,68 @@ pub struct RulOptions {
     pub product: String,
     /// `VERSION:` line. Default: this crate's version.
     pub version: String,
-    /// `CREATION DATE:` and `CREATION TIME:` lines, as given (e.g.
-    /// `("2026-12-02", "16:40:00")`). Default `None`: left out.
-    pub created: Option<(String, String)>,
+    /// `CREATION DATE:` and `CREATION TIME:` lines. Default `None`: left out.
+    pub created: Option<Created>,
+}
+
+/// When a rule table was written, UTC: the `.RUL` header's `CREATION DATE:`
+/// and `CREATION TIME:`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Created(chrono::DateTime<chrono::Utc>);
+
+/// A creation stamp that cannot be read.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum CreatedError {
+    /// Not an RFC 3339 date-time.
+    #[error("`{text}` is not an RFC 3339 date-time (e.g. 2026-12-03T14:05:00Z): {reason}")]
+    NotRfc3339 {
+        /// What was given.
+        text: String,
+        /// Why it was refused.
+        reason: String,
+    },
+    /// Seconds since the epoch outside what a date can hold.
+    #[error("{0} s since 1970-01-01 is not a date")]
+    OutOfRange(i64),
+}
+
+impl Created {
+    /// 1970-01-01T00:00:00Z.
+    pub const EPOCH: Self = Self(chrono::DateTime::UNIX_EPOCH);
+
+    /// From an RFC 3339 date-time (`2026-12-03T15:05:00+01:00`), converted to
+    /// UTC, whole seconds.
+    ///
+    /// # Errors
+    /// [`CreatedError::NotRfc3339`].
+    pub fn from_rfc3339(text: &str) -> Result<Self, CreatedError> {
+        let t = chrono::DateTime::parse_from_rfc3339(text.trim())
+            .map_err(|e| CreatedError::NotRfc3339 { text: text.to_owned(), reason: e.to_string() })?;
+        Self::from_unix(t.timestamp())
+    }
+
+    /// From seconds since 1970-01-01T00:00:00Z (`SOURCE_DATE_EPOCH`).
+    ///
+    /// # Errors
+    /// [`CreatedError::OutOfRange`].
+    pub fn from_unix(seconds: i64) -> Result<Self, CreatedError> {
+        chrono::DateTime::from_timestamp(seconds, 0).map(Self).ok_or(CreatedError::OutOfRange(seconds))
+    }
+
+    /// `YYYY-MM-DD`.
+    pub fn date(&self) -> String {
+        self.0.format("%Y-%m-%d").to_string()
+    }
+
+    /// `HH:MM:SS`.
+    pub fn time(&self) -> String {
+        self.0.format("%H:%M:%S").to_string()
+    }
+
+    /// RFC 3339, `Z` for UTC (`2026-12-03T14:05:00Z`).
+    pub fn to_rfc3339(&self) -> String {
+        self.0.to_rfc3339_opts(chrono::SecondsFormat::Secs, true)
+    }
 }
 
 impl Default for RulOptions {
@@ -106,9 +172,9 @@ pub fn rules_rul_with(t: &GradeRuleTable, opts: &RulOptions) -> String {
     let _ = writeln!(out, "AUTHOR: {}", one_line(&opts.author));
     let _ = writeln!(out, "PRODUCT: {}", one_line(&opts.product));
     let _ = writeln!(out, "VERSION: {}", one_line(&opts.version));
-    if let Some((date, time)) = &opts.created {
-        let _ = writeln!(out, "CREATION DATE: {}", one_line(date));
-        let _ = writeln!(out, "CREATION TIME: {}", one_line(time));
+    if let Some(c) = &opts.created {
+        let _ = writeln!(out, "CREATION DATE: {}", c.date());
+        let _ = writeln!(out, "CREATION TIME: {}", c.time());
     }
     out.push_str("UNITS: METRIC\n");
     let _ = writeln!(out, "GRADE RULE TABLE: {}", one_line(&t.style));
@@ -178,6 +244,20 @@ mod tests {
     use crate::pattern::export::test_pieces;
 
     #[test]
+    fn creation_stamps_read_rfc3339_and_epoch_seconds_and_name_bad_ones() {
+        let c = Created::from_rfc3339("2026-12-03T00:30:59.75-02:00").unwrap();
+        assert_eq!((c.date(), c.time()), ("2026-12-03".to_string(), "02:30:59".to_string()));
+        assert_eq!(c.to_rfc3339(), "2026-12-03T02:30:59Z");
+        assert_eq!(Created::from_unix(1_796_265_059).unwrap(), c);
+        assert_eq!(Created::from_unix(0).unwrap().to_rfc3339(), "1970-01-01T00:00:00Z");
+        for bad in ["2026-12-03", "yesterday", "2026-13-01T00:00:00Z", ""] {
+            let e = Created::from_rfc3339(bad).unwrap_err();
+            assert!(matches!(&e, CreatedError::NotRfc3339 { text, .. } if text == bad), "{bad}: {e}");
+        }
+        assert_eq!(Created::from_unix(i64::MAX), Err(CreatedError::OutOfRange(i64::MAX)));
+    }
+
+    #[test]
     fn rul_lists_sizes_and_one_delta_per_size() {
         let t = test_pieces::rules();
         let rul = rules_rul(&t);
@@ -186,7 +266,10 @@ mod tests {
         assert!(!rul.contains("CREATION"), "no date unless given");
         let dated = rules_rul_with(
             &t,
-            &RulOptions { created: Some(("2026-12-02".into(), "16:40:00".into())), ..RulOptions::default() },
+            &RulOptions {
+                created: Some(Created::from_rfc3339("2026-12-02T17:40:00+01:00").unwrap()),
+                ..RulOptions::default()
+            },
         );
         assert!(dated.lines().any(|l| l == "CREATION DATE: 2026-12-02"));
         assert!(dated.lines().any(|l| l == "CREATION TIME: 16:40:00"));
