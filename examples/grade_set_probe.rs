@@ -6,6 +6,8 @@
 //! steps, and each piece's width per size.
 //!
 //! `cargo run --release --example grade_set_probe -- fixtures/size-charts/mens-36-46-in.csv trousers 42 [hip]`
+//! (`NEST_DETAIL=1`: where consecutive sizes cross; `POINTS=a,b`: feature points
+//! and the nodes on them; `COLLISION=1`: what the collision steps did per size)
 
 use std::collections::BTreeMap;
 
@@ -104,6 +106,21 @@ fn main() {
             .map(|r| format!("{} {:.2}% [{}]", r.name, r.distortion.strain_p95 * 100.0, r.found_darts.len()))
             .collect();
         println!("{}: {}", row.size, line.join(", "));
+        // COLLISION=1: what the collision steps did (a node pushed out of the arm jumps the grade)
+        if std::env::var("COLLISION").is_ok() {
+            let c = &g.collision;
+            println!(
+                "  {} pushed {}, refused {}, settled {}, fixed settled {}; {:?}; surface lifts {}, largest {:.1} mm",
+                row.size,
+                c.pushed,
+                c.refused,
+                c.settled,
+                c.fixed_settled,
+                c.coarse,
+                c.surface.lifts,
+                c.surface.max_moved_mm
+            );
+        }
         if plan.is_none() && !each {
             plan = Some(g.pattern.dart_plan.clone());
         }
