@@ -368,42 +368,28 @@ fn grade_command_writes_the_services_artefacts() {
         let mine = std::fs::read(out.join(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert!(mine == served.body, "{name}: the command's bytes differ from the service's");
     }
-    // bad input: exit 2, the message names the file
-    let missing = dir.join("missing.csv");
-    let e = run(&[
-        "--chart".as_ref(),
-        missing.as_os_str(),
-        "--templates".as_ref(),
-        "trousers".as_ref(),
-        "--out".as_ref(),
-        out.as_os_str(),
-    ]);
-    assert_eq!(e.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&e.stderr).contains("missing.csv"), "{}", String::from_utf8_lossy(&e.stderr));
+    // bad input: exit 2 before any work, the message naming the file (or the option)
+    let refused = |chart: &std::path::Path, extra: &[&str], named: &str| {
+        let mut args: Vec<&std::ffi::OsStr> = vec![
+            "--chart".as_ref(),
+            chart.as_os_str(),
+            "--templates".as_ref(),
+            "trousers".as_ref(),
+            "--out".as_ref(),
+            out.as_os_str(),
+        ];
+        args.extend(extra.iter().map(|a| std::ffi::OsStr::new(*a)));
+        let e = run(&args);
+        let stderr = String::from_utf8_lossy(&e.stderr);
+        assert_eq!(e.status.code(), Some(2), "{stderr}");
+        assert!(stderr.contains(named), "{named} not named: {stderr}");
+    };
+    refused(&dir.join("missing.csv"), &[], "missing.csv");
     std::fs::write(&chart, "size,unit,shoe_size\n8,in,9\n").unwrap();
-    let e = run(&[
-        "--chart".as_ref(),
-        chart.as_os_str(),
-        "--templates".as_ref(),
-        "trousers".as_ref(),
-        "--out".as_ref(),
-        out.as_os_str(),
-    ]);
-    assert_eq!(e.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&e.stderr).contains("chart.csv"), "{}", String::from_utf8_lossy(&e.stderr));
-    // a stamp that is not RFC 3339: exit 2 naming the option, before any work
-    let e = run(&[
-        "--chart".as_ref(),
-        chart.as_os_str(),
-        "--templates".as_ref(),
-        "trousers".as_ref(),
-        "--out".as_ref(),
-        out.as_os_str(),
-        "--created".as_ref(),
-        "yesterday".as_ref(),
-    ]);
-    assert_eq!(e.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&e.stderr).contains("--created"), "{}", String::from_utf8_lossy(&e.stderr));
+    refused(&chart, &[], "chart.csv");
+    // a stamp that is not RFC 3339
+    std::fs::write(&chart, csv).unwrap();
+    refused(&chart, &["--created", "yesterday"], "--created");
     // the service's: a 400 naming the field
     let r = call(
         "POST",
