@@ -285,8 +285,7 @@ fn creation_stamp(given: Option<&str>) -> Result<grade3d::pattern::export::rul::
             .map_err(|_| format!("SOURCE_DATE_EPOCH: `{epoch}` is not whole seconds since 1970"))?;
         return Created::from_unix(secs).map_err(|e| format!("SOURCE_DATE_EPOCH: {e}"));
     }
-    let now = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_err(|e| e.to_string())?;
-    Created::from_unix(i64::try_from(now.as_secs()).unwrap_or(i64::MAX)).map_err(|e| e.to_string())
+    Ok(Created::from_system_time(std::time::SystemTime::now()))
 }
 
 /// `grade3d grade` (see [`GradeArgs`]): the service's flows

@@ -41,6 +41,15 @@ fn every_fixture_point_has_a_sound_frame() {
     eprintln!("smallest |t1·(t2×n)| over all fixtures: {:.3} at {}", worst.0, worst.1);
 }
 
+/// The embedded hm08 model built with `macros` (no modifiers) and its
+/// landmarks, as the population of issue #13 makes its bodies.
+fn embedded_body(macros: MacroParams) -> (TriMesh, Landmarks) {
+    let model = BodyModel::embedded().unwrap();
+    let mesh = model.build(&MannequinParams { macros, modifiers: BTreeMap::new() }).unwrap();
+    let lm = hm08_landmarks(model, &mesh, &Default::default()).unwrap();
+    (mesh, lm)
+}
+
 /// Regression (issue #13): population body 36 (seed 13), a heavy, short,
 /// muscular man, was refused with `degenerate frame at neck_left`
 /// (|t1·(t2×n)| = 0.013): the medial end of MakeHuman's `shoulder-dist`, the
@@ -49,23 +58,17 @@ fn every_fixture_point_has_a_sound_frame() {
 /// neck base's crossings with its coronal plane (`hm08_landmarks`).
 #[test]
 fn side_neck_points_on_a_full_trapezius_have_a_sound_frame() {
-    let model = BodyModel::embedded().unwrap();
-    let params = MannequinParams {
-        macros: MacroParams {
-            gender: 1.0,
-            age: 0.8845606370222278,
-            muscle: 0.9433229434366929,
-            weight: 0.9067075229879981,
-            height: 0.09644097802691187,
-            proportions: 0.5459620630190798,
-            african: 0.06705245925776493,
-            asian: 0.4226676162369004,
-            caucasian: 0.5102799245053347,
-        },
-        modifiers: BTreeMap::new(),
-    };
-    let mesh = model.build(&params).unwrap();
-    let lm = hm08_landmarks(model, &mesh, &Default::default()).unwrap();
+    let (mesh, lm) = embedded_body(MacroParams {
+        gender: 1.0,
+        age: 0.8845606370222278,
+        muscle: 0.9433229434366929,
+        weight: 0.9067075229879981,
+        height: 0.09644097802691187,
+        proportions: 0.5459620630190798,
+        african: 0.06705245925776493,
+        asian: 0.4226676162369004,
+        caucasian: 0.5102799245053347,
+    });
     let opts = DeriveOptions::default();
     let body = derive_features(mesh, &lm, &opts).unwrap_or_else(|e| panic!("refused: {e}"));
     for id in [PointId::NeckLeft, PointId::NeckRight] {
@@ -85,23 +88,17 @@ fn side_neck_points_on_a_full_trapezius_have_a_sound_frame() {
 /// apart (every fixture body).
 #[test]
 fn pressed_thighs_are_found_and_named() {
-    let model = BodyModel::embedded().unwrap();
-    let params = MannequinParams {
-        macros: MacroParams {
-            gender: 0.0,
-            age: 1.0,
-            muscle: 0.0,
-            weight: 1.0,
-            height: 0.5,
-            proportions: 0.0,
-            african: 0.0,
-            asian: 1.0,
-            caucasian: 0.0,
-        },
-        modifiers: BTreeMap::new(),
-    };
-    let mesh = model.build(&params).unwrap();
-    let lm = hm08_landmarks(model, &mesh, &Default::default()).unwrap();
+    let (mesh, lm) = embedded_body(MacroParams {
+        gender: 0.0,
+        age: 1.0,
+        muscle: 0.0,
+        weight: 1.0,
+        height: 0.5,
+        proportions: 0.0,
+        african: 0.0,
+        asian: 1.0,
+        caucasian: 0.0,
+    });
     let body = derive(mesh, &lm);
     let c = body.thigh_contact.as_ref().expect("pop04's thighs press together");
     eprintln!("pop04: {:.1} mm below the crotch, {:.0} mm long", c.depth_below_crotch_mm, c.length_mm);

@@ -610,12 +610,7 @@ fn parse_created(created: Option<&str>) -> Result<Option<Created>, Problem> {
 /// computed. A result is content addressed by its input, the given stamp
 /// included, so a cached result keeps the stamp of its computation.
 fn stamp_now(given: Option<Created>) -> Created {
-    given.unwrap_or_else(|| {
-        let secs = std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map_or(0, |d| i64::try_from(d.as_secs()).unwrap_or(i64::MAX));
-        Created::from_unix(secs).unwrap_or(Created::EPOCH)
-    })
+    given.unwrap_or_else(|| Created::from_system_time(std::time::SystemTime::now()))
 }
 
 fn parse_chart(s: &AppState, chart: &serde_json::Value, figure: Option<FigureType>) -> Result<SizeChart, Problem> {

@@ -104,6 +104,16 @@ impl Created {
         chrono::DateTime::from_timestamp(seconds, 0).map(Self).ok_or(CreatedError::OutOfRange(seconds))
     }
 
+    /// From a clock reading the caller took (this module reads no clock),
+    /// whole seconds; a time before 1970 is [`Self::EPOCH`].
+    pub fn from_system_time(t: std::time::SystemTime) -> Self {
+        t.duration_since(std::time::UNIX_EPOCH)
+            .ok()
+            .and_then(|d| i64::try_from(d.as_secs()).ok())
+            .and_then(|secs| Self::from_unix(secs).ok())
+            .unwrap_or(Self::EPOCH)
+    }
+
     /// `YYYY-MM-DD`.
     pub fn date(&self) -> String {
         self.0.format("%Y-%m-%d").to_string()
@@ -255,6 +265,12 @@ mod tests {
             assert!(matches!(&e, CreatedError::NotRfc3339 { text, .. } if text == bad), "{bad}: {e}");
         }
         assert_eq!(Created::from_unix(i64::MAX), Err(CreatedError::OutOfRange(i64::MAX)));
+        let at = std::time::UNIX_EPOCH + std::time::Duration::from_millis(1_796_265_059_750);
+        assert_eq!(Created::from_system_time(at), c);
+        assert_eq!(
+            Created::from_system_time(std::time::UNIX_EPOCH - std::time::Duration::from_secs(1)),
+            Created::EPOCH
+        );
     }
 
     #[test]
