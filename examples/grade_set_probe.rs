@@ -126,8 +126,30 @@ fn main() {
         }
         by_row.insert(i, g.pattern.pieces);
     }
-    let sizes: Vec<(String, Vec<PatternPiece>)> =
+    let mut sizes: Vec<(String, Vec<PatternPiece>)> =
         by_row.into_iter().map(|(i, p)| (chart.rows[i].size.clone(), p)).collect();
+    // NOTRUE=1: the nest as cut, not trued at its corners
+    if std::env::var("NOTRUE").is_err() {
+        let before = seam_runs(&sizes);
+        let b = sizes.iter().position(|(s, _)| *s == base).unwrap();
+        let report = grade3d::pattern::true_up::true_nest(&mut sizes, b, &Default::default());
+        let after = seam_runs(&sizes);
+        let worst = before
+            .iter()
+            .zip(&after)
+            .map(|(x, y)| (x.0.clone(), (x.1 - y.1).abs()))
+            .max_by(|x, y| x.1.total_cmp(&y.1));
+        println!(
+            "trued: {} piece-sizes moved, largest {:.2} mm, {} corners left; worst seam-side length mismatch change {:?}",
+            report.moved.len(),
+            report.largest_move_mm,
+            report.left,
+            worst
+        );
+        for m in &report.moved {
+            println!("  trued {} {}: {} corners, {:.2} mm", m.piece, m.size, m.corners, m.moved_mm);
+        }
+    }
     let nest = nests(&sizes).unwrap();
     for (piece, all) in &nest {
         let widths: Vec<String> = all
@@ -138,6 +160,8 @@ fn main() {
             })
             .collect();
         println!("{piece} widths: {}", widths.join(" "));
+        let counts: Vec<String> = all.iter().map(|p| format!("{}/{}", p.sew_line.len(), p.corners.len())).collect();
+        println!("{piece} sew-line points/corners: {}", counts.join(" "));
     }
     for st in nest_steps(&nest) {
         println!("  {} {}→{}: crossings {}, outside {}", st.piece, st.smaller, st.larger, st.crossings, st.outside);
@@ -211,4 +235,41 @@ fn main() {
             s.join(" ")
         );
     }
+}
+
+/// Per size and run shared by two pieces (the same two consecutive corner
+/// nodes): the difference of the two sides' run lengths, mm.
+fn seam_runs(sizes: &[(String, Vec<PatternPiece>)]) -> Vec<(String, f64)> {
+    use grade3d::pattern::piece::GradePointKind;
+    let mut out = Vec::new();
+    for (size, pieces) in sizes {
+        let mut runs: BTreeMap<(u32, u32), Vec<(String, f64)>> = BTreeMap::new();
+        for p in pieces {
+            let mut a: Vec<(usize, u32)> = p
+                .grade_points
+                .iter()
+                .filter(|g| g.kind == GradePointKind::Corner)
+                .filter_map(|g| p.sew_line.iter().position(|q| q.distance(g.at) < 1e-9).map(|i| (i, g.node)))
+                .collect();
+            a.sort_unstable();
+            let n = p.sew_line.len();
+            for k in 0..a.len() {
+                let (i, u) = a[k];
+                let (j, v) = a[(k + 1) % a.len()];
+                let mut len = 0.0;
+                let mut q = i;
+                while q != j {
+                    len += p.sew_line[q].distance(p.sew_line[(q + 1) % n]);
+                    q = (q + 1) % n;
+                }
+                runs.entry((u.min(v), u.max(v))).or_default().push((p.name.clone(), len));
+            }
+        }
+        for ((u, v), sides) in runs {
+            if sides.len() == 2 {
+                out.push((format!("{size} {}/{} {u}-{v}", sides[0].0, sides[1].0), sides[0].1 - sides[1].1));
+            }
+        }
+    }
+    out
 }

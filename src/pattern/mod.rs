@@ -2,7 +2,7 @@
 //! into panels along the seams ([`panels`]), flatten each ([`flatten`]),
 //! build pattern pieces with sew and cut lines, notches and grain
 //! ([`assemble`]), check their internal lines ([`lines`]), grade them
-//! across sizes ([`grade`]) and export them ([`export`]).
+//! across sizes ([`grade`]), true their nests at the corners ([`true_up`]) and export them ([`export`]).
 
 pub mod assemble;
 pub mod darts;
@@ -13,3 +13,4 @@ pub mod grade;
 pub mod lines;
 pub mod panels;
 pub mod piece;
+pub mod true_up;
