@@ -134,11 +134,8 @@ fn main() {
         let b = sizes.iter().position(|(s, _)| *s == base).unwrap();
         let report = grade3d::pattern::true_up::true_nest(&mut sizes, b, &Default::default());
         let after = seam_runs(&sizes);
-        let worst = before
-            .iter()
-            .zip(&after)
-            .map(|(x, y)| (x.0.clone(), (x.1 - y.1).abs()))
-            .max_by(|x, y| x.1.total_cmp(&y.1));
+        let worst =
+            before.iter().zip(&after).map(|(x, y)| (x.0.clone(), (x.1 - y.1).abs())).max_by(|x, y| x.1.total_cmp(&y.1));
         println!(
             "trued: {} piece-sizes moved, largest {:.2} mm, {} corners left; worst seam-side length mismatch change {:?}",
             report.moved.len(),

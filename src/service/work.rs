@@ -9,7 +9,11 @@
 //!   graded nest and grade rules per template (issue #5), per-size meshes and
 //!   patterns, and the fit report. The base size is graded first and its
 //!   dart plan carried to every other size (issue #14: one dart plan per
-//!   run, [`crate::pattern::garment::DartPlan`]).
+//!   run, [`crate::pattern::garment::DartPlan`]); each template's nest is
+//!   trued at its corners outwards from the base size
+//!   ([`crate::pattern::true_up`]) before the per-size patterns, the nest and
+//!   the rules are written, and the report says by how much
+//!   (`nest_truing`).
 //! - [`scan`]: one body scan with its landmarks, one template.
 //! - [`bodies`]: many scans × templates (the batch flow's bodies part); with
 //!   several bodies the base body's dart plan is carried to the others.
@@ -43,6 +47,7 @@ use crate::pattern::export::{dxf, svg, ExportError};
 use crate::pattern::garment::DartPlan;
 use crate::pattern::grade::{grade_rules, nests, GradeError};
 use crate::pattern::piece::PatternPiece;
+use crate::pattern::true_up::{true_nest, TrueOptions, TrueReport};
 use crate::pipeline::{grade_with_plan, GradeOptions, Graded, PipelineError};
 use crate::template::format::Template;
 
@@ -158,11 +163,18 @@ pub struct WorkOptions {
     pub grade: GradeOptions,
     /// Depth maps.
     pub render: RenderOptions,
+    /// Truing the size-chart flow's nests ([`crate::pattern::true_up`]).
+    pub true_nest: TrueOptions,
 }
 
 impl Default for WorkOptions {
     fn default() -> Self {
-        Self { max_scan_vertices: 500_000, grade: GradeOptions::default(), render: RenderOptions::default() }
+        Self {
+            max_scan_vertices: 500_000,
+            grade: GradeOptions::default(),
+            render: RenderOptions::default(),
+            true_nest: TrueOptions::default(),
+        }
     }
 }
 
@@ -308,33 +320,77 @@ fn grade_body(
         timer.add_ms(stage::PATTERN, g.timings.pattern_ms);
         let start = Instant::now();
         let stem = format!("{}-{}", t.name, size);
-        let pieces = &g.pattern.pieces;
-        out.push(Artefact {
-            name: format!("{stem}.pattern.svg"),
-            media_type: "image/svg+xml",
-            bytes: svg::pieces_svg(pieces, &Default::default()).into_bytes(),
-        });
-        out.push(Artefact {
-            name: format!("{stem}.pattern.dxf"),
-            media_type: "image/vnd.dxf",
-            bytes: dxf::pieces_dxf(&t.name, pieces, &Default::default())?,
-        });
-        out.push(Artefact {
-            name: format!("{stem}.pattern.accumark.dxf"),
-            media_type: "image/vnd.dxf",
-            bytes: dxf::pieces_dxf(&t.name, pieces, &gerber())?,
-        });
-        out.push(Artefact {
-            name: format!("{stem}.pattern.json"),
-            media_type: "application/json",
-            bytes: serde_json::to_vec(&g.pattern).unwrap_or_default(),
-        });
+        out.extend(pattern_artefacts(&t.name, size, &g)?);
         let (glb, fit) = garment_glb(t, &g, body, obstacle.as_deref())?;
         out.push(Artefact { name: format!("{stem}.garment.glb"), media_type: "model/gltf-binary", bytes: glb });
         timer.add(stage::EXPORT, start);
         graded.push((t.name.clone(), g, fit));
     }
     Ok(graded)
+}
+
+/// The pattern of one template on one size: SVG, DXF (AAMA and AccuMark) and JSON.
+fn pattern_artefacts(template: &str, size: &str, g: &Graded) -> Result<Vec<Artefact>, WorkError> {
+    let stem = format!("{template}-{size}");
+    let pieces = &g.pattern.pieces;
+    Ok(vec![
+        Artefact {
+            name: format!("{stem}.pattern.svg"),
+            media_type: "image/svg+xml",
+            bytes: svg::pieces_svg(pieces, &Default::default()).into_bytes(),
+        },
+        Artefact {
+            name: format!("{stem}.pattern.dxf"),
+            media_type: "image/vnd.dxf",
+            bytes: dxf::pieces_dxf(template, pieces, &Default::default())?,
+        },
+        Artefact {
+            name: format!("{stem}.pattern.accumark.dxf"),
+            media_type: "image/vnd.dxf",
+            bytes: dxf::pieces_dxf(template, pieces, &gerber())?,
+        },
+        Artefact {
+            name: format!("{stem}.pattern.json"),
+            media_type: "application/json",
+            bytes: serde_json::to_vec(&g.pattern).unwrap_or_default(),
+        },
+    ])
+}
+
+/// One graded row of a size chart: its size, each template's grade (with its
+/// fit report) and the row's artefacts.
+type GradedRow = (String, Vec<(String, Graded, serde_json::Value)>, Vec<Artefact>);
+
+/// Trues every template's nest over the graded rows (chart order, `base`
+/// their base row) and writes the per-size pattern artefacts of the pieces
+/// it moved again; per template, what it did.
+fn true_rows(
+    templates: &[Template],
+    rows: &mut [GradedRow],
+    base: usize,
+    opts: &TrueOptions,
+) -> Result<Vec<(String, TrueReport)>, WorkError> {
+    let mut reports = Vec::with_capacity(templates.len());
+    for (ti, t) in templates.iter().enumerate() {
+        let mut sizes: Vec<(String, Vec<PatternPiece>)> =
+            rows.iter().map(|(size, graded, _)| (size.clone(), graded[ti].1.pattern.pieces.clone())).collect();
+        let report = true_nest(&mut sizes, base, opts);
+        for ((size, graded, out), (_, pieces)) in rows.iter_mut().zip(sizes) {
+            if !report.moved.iter().any(|m| m.size == *size) {
+                continue;
+            }
+            let g = &mut graded[ti].1;
+            g.pattern.pieces = pieces;
+            let fresh = pattern_artefacts(&t.name, size, g)?;
+            for a in fresh {
+                if let Some(old) = out.iter_mut().find(|o| o.name == a.name) {
+                    *old = a;
+                }
+            }
+        }
+        reports.push((t.name.clone(), report));
+    }
+    Ok(reports)
 }
 
 /// The garment as GLB with the ease (distance to the body, mm) and the
@@ -562,13 +618,24 @@ pub fn size_chart(
         done_rows[i] = Some((graded, mannequin, out));
     }
     // reported in the chart's order
+    let mut rows = Vec::with_capacity(total);
+    let mut mannequins = Vec::with_capacity(total);
     for (row, done) in chart.rows.iter().zip(done_rows) {
         let Some((graded, mannequin, out)) = done else { continue };
-        artefacts.extend(out);
-        let garments = collect(graded, &row.size, &mut per_template);
-        sizes.push(serde_json::json!({"size": row.size, "mannequin": mannequin, "garments": garments}));
+        rows.push((row.size.clone(), graded, out));
+        mannequins.push(mannequin);
     }
     progress(stage::EXPORT, total, total);
+    // the nests trued outwards from the base size before anything of them is written
+    let start = Instant::now();
+    let base_index = rows.iter().position(|r| r.0 == base).unwrap_or(0);
+    let truing = true_rows(templates, &mut rows, base_index, &ctx.opts.true_nest)?;
+    timer.add(stage::EXPORT, start);
+    for ((size, graded, out), mannequin) in rows.into_iter().zip(mannequins) {
+        artefacts.extend(out);
+        let garments = collect(graded, &size, &mut per_template);
+        sizes.push(serde_json::json!({"size": size, "mannequin": mannequin, "garments": garments}));
+    }
     graded_nests(templates, &per_template, &base, created, &mut timer, &mut artefacts)?;
     let report = serde_json::json!({
         "flow": "size-chart",
@@ -578,6 +645,7 @@ pub fn size_chart(
         "base_size": base,
         "templates": templates.iter().map(|t| serde_json::json!({"name": t.name, "version": t.version})).collect::<Vec<_>>(),
         "collision_checked": ctx.gpu.is_some(),
+        "nest_truing": truing.into_iter().collect::<BTreeMap<_, _>>(),
         "sizes": sizes,
     });
     Ok(finish(report, artefacts, timer))
