@@ -237,18 +237,11 @@ fn main() {
 /// Per size and run shared by two pieces (the same two consecutive corner
 /// nodes): the difference of the two sides' run lengths, mm.
 fn seam_runs(sizes: &[(String, Vec<PatternPiece>)]) -> Vec<(String, f64)> {
-    use grade3d::pattern::piece::GradePointKind;
     let mut out = Vec::new();
     for (size, pieces) in sizes {
         let mut runs: BTreeMap<(u32, u32), Vec<(String, f64)>> = BTreeMap::new();
         for p in pieces {
-            let mut a: Vec<(usize, u32)> = p
-                .grade_points
-                .iter()
-                .filter(|g| g.kind == GradePointKind::Corner)
-                .filter_map(|g| p.sew_line.iter().position(|q| q.distance(g.at) < 1e-9).map(|i| (i, g.node)))
-                .collect();
-            a.sort_unstable();
+            let a = grade3d::pattern::true_up::anchors(p);
             let n = p.sew_line.len();
             for k in 0..a.len() {
                 let (i, u) = a[k];

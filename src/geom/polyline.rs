@@ -378,12 +378,18 @@ pub fn segment_crosses_polygon(p: DVec2, q: DVec2, poly: &[DVec2]) -> bool {
 /// Distance from `p` to the outline of the closed polygon `poly` (infinite
 /// for an empty one).
 pub fn distance_to_polygon(poly: &[DVec2], p: DVec2) -> f64 {
+    nearest_edge(poly, p).0
+}
+
+/// Distance from `p` to the outline of the closed polygon `poly` and the
+/// index `j` of the edge `(j, j + 1)` nearest it (`(∞, 0)` for an empty one).
+pub fn nearest_edge(poly: &[DVec2], p: DVec2) -> (f64, usize) {
     (0..poly.len())
         .map(|i| {
             let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
-            p.distance(a.lerp(b, point_segment(p.extend(0.0), a.extend(0.0), b.extend(0.0))))
+            (p.distance(a.lerp(b, point_segment(p.extend(0.0), a.extend(0.0), b.extend(0.0)))), i)
         })
-        .fold(f64::INFINITY, f64::min)
+        .fold((f64::INFINITY, 0), |x, y| if y.0 < x.0 { y } else { x })
 }
 
 /// Even–odd point-in-polygon test in 2D.

@@ -80,7 +80,7 @@ use serde::{Deserialize, Serialize};
 
 use super::assemble::{offset_polygon, untangle, PieceOptions};
 use super::piece::{GradePointKind, PatternPiece};
-use crate::geom::polyline::point_in_polygon;
+use crate::geom::polyline::{nearest_edge, point_in_polygon};
 
 /// Knobs of truing a nest.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -238,8 +238,9 @@ pub fn true_nest(sizes: &mut [(String, Vec<PatternPiece>)], base: usize, opts: &
     report
 }
 
-/// Sew-line index of every corner grade point of `p`, with its node, in outline order.
-fn anchors(p: &PatternPiece) -> Vec<(usize, u32)> {
+/// Sew-line index of every corner grade point of `p`, with its node, in
+/// outline order: the ends of the runs a truing move spreads along.
+pub fn anchors(p: &PatternPiece) -> Vec<(usize, u32)> {
     let mut out: Vec<(usize, u32)> = p
         .grade_points
         .iter()
@@ -373,54 +374,53 @@ fn needed(
         seam(la[before].1, la[after].1)
     };
     let m = small.sew_line.len();
-    for i in 0..m {
-        let q = small.sew_line[i];
-        if point_in_polygon(&large.sew_line, q) {
-            continue;
-        }
-        let (d, j) = nearest_edge(&large.sew_line, q);
-        if d <= 0.0 {
-            continue;
-        }
+    let edge_normal = |line: &[DVec2], j: usize| outward((line[(j + 1) % line.len()] - line[j]).normalize_or_zero());
+    let vertex_normal = |line: &[DVec2], i: usize| {
+        let k = line.len();
+        outward((line[(i + 1) % k] - line[(i + k - 1) % k]).normalize_or_zero())
+    };
+    for (i, d, j) in wrong_side(&small.sew_line, &large.sew_line, true) {
         let push = d + opts.margin_mm;
         if sign > 0.0 {
-            let e = (large.sew_line[(j + 1) % n] - large.sew_line[j]).normalize_or_zero();
             for k in [j, (j + 1) % n] {
                 if !on_seam(k) {
-                    keep_largest(moves, k, outward(e) * push);
+                    keep_largest(moves, k, edge_normal(&large.sew_line, j) * push);
                 }
             }
         } else if m == n && !on_seam(i) {
-            let e = (small.sew_line[(i + 1) % m] - small.sew_line[(i + m - 1) % m]).normalize_or_zero();
-            keep_largest(moves, i, -outward(e) * push);
+            keep_largest(moves, i, -vertex_normal(&small.sew_line, i) * push);
         }
     }
     // and a point of the larger size's line inside the smaller one's (the lines cross between
     // the smaller size's points): that point out (growing) or the smaller line there in
-    for i in 0..n {
-        let q = large.sew_line[i];
-        if !point_in_polygon(&small.sew_line, q) {
-            continue;
-        }
-        let (d, j) = nearest_edge(&small.sew_line, q);
-        if d <= 0.0 {
-            continue;
-        }
+    for (i, d, j) in wrong_side(&large.sew_line, &small.sew_line, false) {
         let push = d + opts.margin_mm;
         if sign > 0.0 {
             if !on_seam(i) {
-                let e = (large.sew_line[(i + 1) % n] - large.sew_line[(i + n - 1) % n]).normalize_or_zero();
-                keep_largest(moves, i, outward(e) * push);
+                keep_largest(moves, i, vertex_normal(&large.sew_line, i) * push);
             }
         } else if m == n {
-            let e = (small.sew_line[(j + 1) % m] - small.sew_line[j]).normalize_or_zero();
             for k in [j, (j + 1) % m] {
                 if !on_seam(k) {
-                    keep_largest(moves, k, -outward(e) * push);
+                    keep_largest(moves, k, -edge_normal(&small.sew_line, j) * push);
                 }
             }
         }
     }
+}
+
+/// The points of `pts` on the wrong side of the closed polygon `poly`
+/// (outside it when `outside`, else inside), off its line: `(index,
+/// distance to the line, index of the nearest edge)`.
+fn wrong_side<'a>(
+    pts: &'a [DVec2],
+    poly: &'a [DVec2],
+    outside: bool,
+) -> impl Iterator<Item = (usize, f64, usize)> + 'a {
+    pts.iter().enumerate().filter(move |(_, &q)| point_in_polygon(poly, q) != outside).filter_map(|(i, &q)| {
+        let (d, j) = nearest_edge(poly, q);
+        (d > 0.0).then_some((i, d, j))
+    })
 }
 
 /// `moves[i]` becomes `v` where `v` is the longer.
@@ -429,21 +429,6 @@ fn keep_largest(moves: &mut Moves, i: usize, v: DVec2) {
     if v.length() > e.length() {
         *e = v;
     }
-}
-
-/// The distance from `q` to the closed polygon and the index of the edge
-/// `(j, j + 1)` it is nearest.
-fn nearest_edge(poly: &[DVec2], q: DVec2) -> (f64, usize) {
-    let n = poly.len();
-    (0..n)
-        .map(|j| {
-            let (a, b) = (poly[j], poly[(j + 1) % n]);
-            let ab = b - a;
-            let t =
-                if ab.length_squared() > 0.0 { ((q - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0) } else { 0.0 };
-            (q.distance(a + ab * t), j)
-        })
-        .fold((f64::INFINITY, 0), |x, y| if y.0 < x.0 { y } else { x })
 }
 
 /// Applies `slides` (mm; `sign` +1 lengthens the runs, −1 shortens them) to
