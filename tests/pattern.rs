@@ -11,14 +11,13 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use grade3d::body::derive::{derive_features, DeriveOptions};
-use grade3d::body::measure::girth_of;
-use grade3d::body::vocab::CurveId;
+use grade3d::body::measure::{measure, MeasureOptions, MeasurementId, Measurements};
 use grade3d::collide::cache::Obstacle;
 use grade3d::collide::render::{GpuContext, RenderOptions};
 use grade3d::geom::winding::{penetration_stats, WindingOptions, WindingTree};
 use grade3d::pattern::export::{dxf, rul, svg};
 use grade3d::pattern::garment::DartPlan;
-use grade3d::pattern::grade::{grade_rules, nest_steps, nests, step_regularity};
+use grade3d::pattern::grade::{governing_girths, grade_rules, nest_steps, nests, step_regularity, step_regularity_by};
 use grade3d::pattern::lines;
 use grade3d::pattern::piece::PatternPiece;
 use grade3d::pattern::true_up::{true_nest, TrueOptions};
@@ -97,8 +96,8 @@ fn patterns_on_every_body_meet_the_bars() {
     let mut bodies = fixture_bodies();
     bodies.sort_by_key(|(name, _, _)| (name.starts_with("astm/"), name != BASE));
     let mut plans: BTreeMap<String, DartPlan> = BTreeMap::new();
-    // the ASTM bodies' hip and bust girths, mm (the governing girths of the grade steps)
-    let mut chart: BTreeMap<&str, BTreeMap<String, f64>> = BTreeMap::new();
+    // every body's measurements, m (the governing girths of the grade steps)
+    let mut chart: BTreeMap<String, Measurements> = BTreeMap::new();
     let mut found_darts: BTreeMap<String, usize> = BTreeMap::new();
     // mirror pairs: worst of area/width/height difference (%) and sew-line distance (mm)
     let (mut mirror, mut mirror_line) = (Worst::default(), Worst::default());
@@ -106,10 +105,7 @@ fn patterns_on_every_body_meet_the_bars() {
     let (mut internal_lines, mut line_problems) = (0usize, Vec::<String>::new());
     for (name, mesh, lm) in bodies {
         let body = derive_features(mesh, &lm, &DeriveOptions::default()).unwrap();
-        for (girth, curve) in [("hip", CurveId::Hip), ("bust", CurveId::Bust)] {
-            let c = &body.curves[&curve];
-            chart.entry(girth).or_default().insert(name.clone(), girth_of(&c.polyline, c.plane.as_ref()) * 1e3);
-        }
+        chart.insert(name.clone(), measure(&body, &MeasureOptions::default()));
         let maps = gpu.render(&body.mesh, &RenderOptions::default()).unwrap();
         let obstacle = Obstacle { maps, tree: WindingTree::new(&body.mesh, &WindingOptions::default()) };
         let size = name.rsplit('/').next().unwrap().to_string();
@@ -323,22 +319,32 @@ fn patterns_on_every_body_meet_the_bars() {
              {nested} of {} steps nest",
             steps.len()
         );
-        let governing = if style == "fitted-bodice" { "bust" } else { "hip" };
-        let girths: Vec<f64> = sizes.iter().map(|(s, _)| chart[governing][&format!("astm/{s}")]).collect();
-        let chart_steps: Vec<f64> = girths.windows(2).map(|w| w[1] - w[0]).collect();
-        let reg = step_regularity(&rules, Some(&chart_steps));
-        let over = reg.iter().filter(|r| r.worst_mm > r.allowed_mm).count();
-        let signs: usize = reg.iter().map(|r| r.sign_changes).sum();
-        let worst = reg.iter().max_by(|a, b| (a.worst_mm - a.allowed_mm).total_cmp(&(b.worst_mm - b.allowed_mm)));
-        eprintln!(
-            "{style} grade steps (scaled by the {governing} steps): {over} of {} grade points vary more than \
-             max(2 mm, 25 %), {signs} sign changes; worst {}",
-            reg.len(),
-            worst.map_or(String::new(), |r| format!(
-                "{} {}: {:.1} mm (allowed {:.1})",
-                r.piece, r.label, r.worst_mm, r.allowed_mm
-            ))
-        );
+        // the steps of one girth per template (bust, hip), and of each grade point's own
+        let template = library.iter().find(|t| t.name == style).unwrap();
+        let governing = if style == "fitted-bodice" { MeasurementId::BustGirth } else { MeasurementId::HipGirth };
+        let steps_of = |m: MeasurementId| -> Option<Vec<f64>> {
+            let girths: Option<Vec<f64>> =
+                sizes.iter().map(|(s, _)| chart[&format!("astm/{s}")].get(&m).copied()).collect();
+            girths.map(|g| g.windows(2).map(|w| w[1] - w[0]).collect())
+        };
+        let one = step_regularity(&rules, steps_of(governing).as_deref());
+        let own = step_regularity_by(&rules, |node| {
+            governing_girths(template, node).into_iter().find_map(steps_of).or_else(|| steps_of(governing))
+        });
+        for (reading, reg) in [(format!("the {governing} steps"), &one), ("each point's own girth".into(), &own)] {
+            let over = reg.iter().filter(|r| r.worst_mm > r.allowed_mm).count();
+            let signs: usize = reg.iter().map(|r| r.sign_changes).sum();
+            let worst = reg.iter().max_by(|a, b| (a.worst_mm - a.allowed_mm).total_cmp(&(b.worst_mm - b.allowed_mm)));
+            eprintln!(
+                "{style} grade steps (scaled by {reading}): {over} of {} grade points vary more than \
+                 max(2 mm, 25 %), {signs} sign changes; worst {}",
+                reg.len(),
+                worst.map_or(String::new(), |r| format!(
+                    "{} {}: {:.1} mm (allowed {:.1})",
+                    r.piece, r.label, r.worst_mm, r.allowed_mm
+                ))
+            );
+        }
         std::fs::write(dir.join(format!("{style}-rules.csv")), rul::rules_table_csv(&rules)).unwrap();
         std::fs::write(dir.join(format!("{style}.rul")), rul::rules_rul(&rules)).unwrap();
     }

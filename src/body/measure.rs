@@ -150,6 +150,42 @@ impl MeasurementId {
     }
 }
 
+impl MeasurementId {
+    /// The girth measured along `curve`: its own ([`MeasurementId::girth_curve`]),
+    /// or for a right leg's or arm's curve the left one's, which a chart gives
+    /// for both.
+    pub fn girth_along(curve: CurveId) -> Option<MeasurementId> {
+        let left = match curve {
+            CurveId::ThighRight => CurveId::ThighLeft,
+            CurveId::KneeRight => CurveId::KneeLeft,
+            CurveId::AnkleRight => CurveId::AnkleLeft,
+            CurveId::ArmscyeRight => CurveId::ArmscyeLeft,
+            c => c,
+        };
+        MeasurementId::ALL.iter().copied().find(|m| m.girth_curve() == Some(left))
+    }
+
+    /// The girths that govern how a grade point at the feature point `point`
+    /// grades, nearest first (issue #14, item 4: a grader reads each point's
+    /// steps against the chart steps of the girth it lies on): the girth
+    /// along either of its two feature curves, and for a point of a shoulder
+    /// line the shoulder girth, taken at the shoulder points' level.
+    pub fn governing(point: PointId) -> Vec<MeasurementId> {
+        let def = crate::body::vocab::point_def(point);
+        let mut out: Vec<MeasurementId> = Vec::new();
+        for curve in [def.f1, def.f2] {
+            let m = match curve {
+                CurveId::ShoulderLineLeft | CurveId::ShoulderLineRight => Some(MeasurementId::ShoulderGirth),
+                c => MeasurementId::girth_along(c),
+            };
+            if let Some(m) = m.filter(|m| !out.contains(m)) {
+                out.push(m);
+            }
+        }
+        out
+    }
+}
+
 /// Measurements by ID, metres.
 pub type Measurements = BTreeMap<MeasurementId, f64>;
 
@@ -221,4 +257,26 @@ pub fn measure(body: &FeatureBody, opts: &MeasureOptions) -> Measurements {
         m.insert(MeasurementId::FrontLength, arc_between(line, a, b));
     }
     m
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_point_is_governed_by_the_girths_it_lies_on() {
+        use MeasurementId as M;
+        assert_eq!(M::governing(PointId::WaistLeft), [M::WaistGirth]);
+        assert_eq!(M::governing(PointId::UnderarmRight), [M::ChestGirth]);
+        assert_eq!(M::governing(PointId::BustLeft), [M::BustGirth]);
+        assert_eq!(M::governing(PointId::ShoulderLeft), [M::ShoulderGirth, M::ArmscyeGirth]);
+        assert_eq!(M::governing(PointId::NeckRight), [M::NeckBaseGirth, M::ShoulderGirth]);
+        // a right leg's points are read against the chart's (left) leg girths
+        assert_eq!(M::governing(PointId::ThighRightInner), [M::ThighGirth]);
+        assert_eq!(M::governing(PointId::KneeRight), [M::KneeGirth]);
+        // a point on no girth (the crotch: centre front and crotch line) has none
+        assert!(M::governing(PointId::Crotch).is_empty());
+        assert_eq!(M::girth_along(CurveId::ArmscyeRight), Some(M::ArmscyeGirth));
+        assert_eq!(M::girth_along(CurveId::CentreFront), None);
+    }
 }

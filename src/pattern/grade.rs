@@ -23,7 +23,9 @@
 use glam::DVec2;
 
 use super::assemble::signed_area;
+use crate::body::measure::MeasurementId;
 use crate::geom::polyline::{distance_to_polygon, point_in_polygon, segments_cross};
+use crate::template::format::Template;
 
 use super::piece::{GradePointKind, GradeRule, GradeRuleTable, PatternPiece, PieceGradeRules};
 
@@ -210,6 +212,19 @@ pub const STEP_SIGN_TOLERANCE_MM: f64 = 0.5;
 /// of the governing girth that the grade steps are scaled by (an uneven
 /// chart).
 pub fn step_regularity(table: &GradeRuleTable, chart_steps: Option<&[f64]>) -> Vec<StepRegularity> {
+    step_regularity_by(table, |_| chart_steps.map(<[f64]>::to_vec))
+}
+
+/// [`step_regularity`] with each grade point's own governing girth:
+/// `chart_steps(node)` gives the chart steps that the steps of the grade
+/// point at template node `node` are scaled by (the girth it lies on,
+/// [`governing_girths`]), `None` to read them unscaled. A step `Δ_k` becomes
+/// `Δ_k · w̄ / w_k`, `w_k` the chart step and `w̄` their mean; chart steps
+/// of the wrong count or not all positive are ignored.
+pub fn step_regularity_by(
+    table: &GradeRuleTable,
+    chart_steps: impl Fn(u32) -> Option<Vec<f64>>,
+) -> Vec<StepRegularity> {
     let mut out = Vec::new();
     for piece in &table.pieces {
         for r in &piece.rules {
@@ -217,10 +232,11 @@ pub fn step_regularity(table: &GradeRuleTable, chart_steps: Option<&[f64]>) -> V
             if raw.is_empty() {
                 continue;
             }
-            let steps: Vec<DVec2> = match chart_steps.filter(|c| c.len() == raw.len() && c.iter().all(|&w| w > 0.0)) {
+            let chart = chart_steps(r.node);
+            let steps: Vec<DVec2> = match chart.filter(|c| c.len() == raw.len() && c.iter().all(|&w| w > 0.0)) {
                 Some(c) => {
                     let mean_w = c.iter().sum::<f64>() / c.len() as f64;
-                    raw.iter().zip(c).map(|(s, w)| *s * (mean_w / w)).collect()
+                    raw.iter().zip(&c).map(|(s, w)| *s * (mean_w / w)).collect()
                 }
                 None => raw,
             };
@@ -236,6 +252,26 @@ pub fn step_regularity(table: &GradeRuleTable, chart_steps: Option<&[f64]>) -> V
                 allowed_mm: (0.25 * mean.length()).max(2.0),
                 sign_changes,
             });
+        }
+    }
+    out
+}
+
+/// The girths that govern how template node `node` grades, nearest first
+/// (issue #14, item 4): for a node placed along a body curve
+/// ([`crate::template::format::OnCurve`]) the girth along that curve, then
+/// those of the feature point it is tied to
+/// ([`MeasurementId::governing`]: a waist point the waist girth, an armpit
+/// point the chest girth). A reader falls back to the template's own
+/// governing girth where the chart gives none of them.
+pub fn governing_girths(t: &Template, node: u32) -> Vec<MeasurementId> {
+    let mut out: Vec<MeasurementId> =
+        t.on_curve.iter().filter(|c| c.node == node).filter_map(|c| MeasurementId::girth_along(c.curve)).collect();
+    if let Some(n) = t.nodes.get(node as usize) {
+        for m in MeasurementId::governing(n.point) {
+            if !out.contains(&m) {
+                out.push(m);
+            }
         }
     }
     out
@@ -364,6 +400,16 @@ mod tests {
         assert!(r.worst_mm > r.allowed_mm, "{r:?}");
         let scaled = &step_regularity(&t, Some(&[4.0, 4.0, -1.0]))[1];
         assert_eq!(scaled.steps.len(), 3, "a chart step that is not positive leaves the steps unscaled");
+        // per grade point: steps +20, +40, +20 of a point whose own girth steps 1, 2, 1 are
+        // even; the other points, read against an even girth, are left as they are
+        t.pieces[0].rules[1].deltas =
+            vec![DVec2::ZERO, DVec2::new(20.0, 0.0), DVec2::new(60.0, 0.0), DVec2::new(80.0, 0.0)];
+        let node = t.pieces[0].rules[1].node;
+        let own = step_regularity_by(&t, |n| Some(if n == node { vec![1.0, 2.0, 1.0] } else { vec![1.0; 3] }));
+        assert!(own[1].worst_mm < 1e-9 && own[1].sign_changes == 0, "{:?}", own[1]);
+        assert_eq!(own[0].steps, step_regularity(&t, None)[0].steps);
+        let one = &step_regularity(&t, Some(&[1.0, 1.0, 1.0]))[1];
+        assert!(one.worst_mm > one.allowed_mm, "read against one even girth the point jumps: {one:?}");
     }
 
     #[test]

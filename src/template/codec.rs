@@ -21,7 +21,9 @@
 //! edges around a girth the template declares an ease for are sampled again
 //! along the body's own eased girth ([`super::girth::refit_rings`]), as
 //! authoring sampled them on the reference body, so that the declared ease
-//! holds on every body.
+//! holds on every body. Before the rings, a node the template places along
+//! a body curve ([`OnCurve`], an armhole node on the armscye) goes there
+//! ([`on_curve_nodes`]).
 //!
 //! Failure modes: a node tied to a feature point the body lacks, a
 //! singular frame at encode time, a profile that cannot be built — each a
@@ -33,13 +35,14 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use super::format::{
-    Dart, Drop, Edge, Face, GradingDefaults, GrainLine, Hang, Node, Notch, Panel, Relocation, Seam, Template,
+    Dart, Drop, Edge, Face, GradingDefaults, GrainLine, Hang, Node, Notch, OnCurve, Panel, Relocation, Seam, Template,
     TemplateError, SCHEMA_ID, SCHEMA_VERSION,
 };
 use super::girth::{girth_plane, place_ring_nodes, refit_rings};
 use super::profile::{Profile, ProfileError};
 use crate::body::feature::FeatureBody;
 use crate::body::vocab::{CurveId, PointId, VOCABULARY_VERSION};
+use crate::geom::polyline::Polyline;
 
 /// Why encoding or decoding failed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -131,6 +134,8 @@ pub struct Draft {
     pub darts: Vec<(String, String, Vec<u32>)>,
     /// Nodes that drop from another perpendicular to a girth.
     pub drops: Vec<Drop>,
+    /// Nodes placed along a body curve.
+    pub on_curve: Vec<OnCurve>,
     /// Nodes that hang straight between two others.
     pub hangs: Vec<Hang>,
     /// Mirror-pair panels (the template's `mirror_pairs`).
@@ -146,7 +151,9 @@ pub struct Draft {
 /// decoding on the reference body reproduces the stored nodes.
 pub fn encode(draft: &Draft, body: &FeatureBody) -> Result<Template, CodecError> {
     let mut hung = draft.clone();
-    let mut moved = drop_nodes(&draft.drops, body, &mut hung.positions);
+    let mut moved: Vec<u32> =
+        on_curve_nodes(&draft.on_curve, body, &mut hung.positions).into_iter().map(|(v, _)| v).collect();
+    moved.extend(drop_nodes(&draft.drops, body, &mut hung.positions));
     moved.extend(hang(&draft.hangs, body, &mut hung.positions));
     if !moved.is_empty() {
         for ((a, b), pts) in &mut hung.profiles {
@@ -269,6 +276,7 @@ pub fn encode(draft: &Draft, body: &FeatureBody) -> Result<Template, CodecError>
         notches: draft.notches.iter().map(|(n, v)| Notch { name: n.clone(), node: *v }).collect(),
         darts,
         drops: draft.drops.clone(),
+        on_curve: draft.on_curve.clone(),
         hangs: draft.hangs.clone(),
         mirror_pairs: draft.mirror_pairs.clone(),
         defaults: draft.defaults.clone(),
@@ -325,6 +333,130 @@ pub fn drop_nodes(drops: &[Drop], body: &FeatureBody, positions: &mut [DVec3]) -
         }
     }
     placed
+}
+
+/// The parameter on `loop_` of an [`OnCurve`] placement and the point
+/// there: `s_from + f·Δs` along the arc from `from`'s nearest point to
+/// `to`'s whose midpoint is nearer `via` (formula at [`OnCurve`]); `None`
+/// for a loop without length.
+pub fn on_curve_point(
+    loop_: &Polyline,
+    from: DVec3,
+    to: DVec3,
+    via: DVec3,
+    fraction: f64,
+    radial: f64,
+) -> Option<(f64, DVec3)> {
+    let total = loop_.length();
+    if total <= f64::EPSILON {
+        return None;
+    }
+    let (s0, s1) = (loop_.closest(from)?.s, loop_.closest(to)?.s);
+    let forward = (s1 - s0).rem_euclid(total);
+    let backward = forward - total;
+    let mid = |d: f64| loop_.point_at((s0 + 0.5 * d).rem_euclid(total)).distance(via);
+    let d = if mid(forward) <= mid(backward) { forward } else { backward };
+    let s = (s0 + fraction * d).rem_euclid(total);
+    Some((s, eased_from_centroid(loop_, s, radial)))
+}
+
+/// `γ(s) + r·(γ(s) − c)/|γ(s) − c|`, `c` the loop's centroid.
+fn eased_from_centroid(loop_: &Polyline, s: f64, radial: f64) -> DVec3 {
+    let c = loop_.point_at(s);
+    c + (c - loop_.centroid()).normalize_or_zero() * radial
+}
+
+/// Places each [`OnCurve`] node on the body's curve. Returns the nodes
+/// placed with their curve parameters; one whose curve or points the body
+/// lacks keeps its position.
+pub fn on_curve_nodes(placements: &[OnCurve], body: &FeatureBody, positions: &mut [DVec3]) -> Vec<(u32, f64)> {
+    let mut placed = Vec::new();
+    for c in placements {
+        let point = |id: PointId| body.points.get(&id).map(|q| q.position);
+        let (Some(curve), Some(from), Some(to), Some(via)) =
+            (body.curves.get(&c.curve), point(c.from), point(c.to), point(c.via))
+        else {
+            continue;
+        };
+        let Some((s, p)) = on_curve_point(&curve.polyline, from, to, via, c.fraction, c.radial_m) else { continue };
+        if let Some(slot) = positions.get_mut(c.node as usize) {
+            *slot = p;
+            placed.push((c.node, s));
+        }
+    }
+    placed
+}
+
+/// Samples the profile of every edge along an [`OnCurve`] curve again on
+/// the body's own curve, as authoring sampled it (the armhole between the
+/// shoulder, the armhole nodes and the armpit): an edge from a node placed
+/// on curve `γ` to another placed on it, or to a node tied to one of the
+/// placement's `from`/`to` feature points (parameter: that point's nearest
+/// curve point), runs the shorter way round between the two parameters,
+///
+/// ```text
+/// Q_k = γ̃(s_a + (k/(n−1))·Δs) + (1 − k/(n−1))·(p_a − γ̃(s_a)) + (k/(n−1))·(p_b − γ̃(s_b))
+/// ```
+///
+/// `γ̃` the curve eased by the placement's offset ([`OnCurve`]), `n` the
+/// profile's point count, `p_a`, `p_b` the decoded end nodes. Eq. (5)'s
+/// affine copy of the reference body's armhole turns with the chord between
+/// its nodes, and on a heavy man's scan (pop31) swung the armhole's lower
+/// half 50 mm out into the arm. Returns how many profiles were refitted.
+///
+/// # Errors
+/// `(edge, ProfileError)` for a profile that cannot be built.
+pub fn refit_on_curve_edges(
+    t: &Template,
+    body: &FeatureBody,
+    placed: &[(u32, f64)],
+    positions: &[DVec3],
+    profiles: &mut [Option<Profile>],
+) -> Result<usize, (u32, ProfileError)> {
+    let mut refitted = 0;
+    let curves: std::collections::BTreeSet<CurveId> = t.on_curve.iter().map(|c| c.curve).collect();
+    for curve in curves {
+        let Some(loop_) = body.curves.get(&curve).map(|c| &c.polyline) else { continue };
+        let total = loop_.length();
+        let ours: Vec<&OnCurve> = t.on_curve.iter().filter(|c| c.curve == curve).collect();
+        let radial = ours.iter().map(|c| c.radial_m).sum::<f64>() / ours.len().max(1) as f64;
+        let mut params: BTreeMap<u32, f64> = BTreeMap::new();
+        let ends: std::collections::BTreeSet<PointId> = ours.iter().flat_map(|c| [c.from, c.to]).collect();
+        for (node, n) in t.nodes.iter().enumerate() {
+            if ends.contains(&n.point) {
+                if let Some(at) = body.points.get(&n.point).and_then(|q| loop_.closest(q.position)) {
+                    params.insert(node as u32, at.s);
+                }
+            }
+        }
+        let on: Vec<u32> = placed.iter().filter(|(v, _)| ours.iter().any(|c| c.node == *v)).map(|&(v, _)| v).collect();
+        params.extend(placed.iter().filter(|(v, _)| on.contains(v)).copied());
+        for (i, e) in t.edges.iter().enumerate() {
+            let (Some(&sa), Some(&sb)) = (params.get(&e.start), params.get(&e.end)) else { continue };
+            if !(on.contains(&e.start) || on.contains(&e.end)) {
+                continue;
+            }
+            let Some(Some(old)) = profiles.get(i) else { continue };
+            let n = old.points().len().max(2);
+            let d = super::girth::shorter_way(sa, sb, total);
+            let (pa, pb) = (positions[e.start as usize], positions[e.end as usize]);
+            let (qa, qb) = (eased_from_centroid(loop_, sa, radial), eased_from_centroid(loop_, sb, radial));
+            let mut pts: Vec<DVec3> = (0..n)
+                .map(|k| {
+                    let w = k as f64 / (n - 1) as f64;
+                    eased_from_centroid(loop_, (sa + w * d).rem_euclid(total), radial)
+                        + (1.0 - w) * (pa - qa)
+                        + w * (pb - qb)
+                })
+                .collect();
+            // the ends exactly on the nodes (the sums above round)
+            pts[0] = pa;
+            pts[n - 1] = pb;
+            profiles[i] = Some(Profile::new(pts).map_err(|source| (i as u32, source))?);
+            refitted += 1;
+        }
+    }
+    Ok(refitted)
 }
 
 /// The part of a hang's line a node may move to, as fractions of the line
@@ -393,7 +525,9 @@ pub fn decode(t: &Template, body: &FeatureBody, relocation: Relocation) -> Resul
     }
     // ring nodes on the body's eased girths (as authored), then the hangs from there
     let eq1 = relocation == Relocation::Eq1Frame;
+    let mut on_curve = Vec::new();
     if eq1 {
+        on_curve = on_curve_nodes(&t.on_curve, body, &mut positions);
         place_ring_nodes(t, body, &mut positions);
         drop_nodes(&t.drops, body, &mut positions);
     }
@@ -418,6 +552,39 @@ pub fn decode(t: &Template, body: &FeatureBody, relocation: Relocation) -> Resul
     if eq1 {
         refit_rings(t, body, &placed, &positions, &mut profiles, &hung)
             .map_err(|(edge, source)| CodecError::Profile { edge, source })?;
+        refit_on_curve_edges(t, body, &on_curve, &positions, &mut profiles)
+            .map_err(|(edge, source)| CodecError::Profile { edge, source })?;
     }
     Ok(CoarseMesh { positions, triangles, profiles, hung })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A horizontal circle of radius 0.1 m about the origin, 360 points.
+    fn circle() -> Polyline {
+        let pts = (0..360)
+            .map(|k| {
+                let a = (k as f64).to_radians();
+                DVec3::new(0.1 * a.cos(), 0.0, 0.1 * a.sin())
+            })
+            .collect();
+        Polyline::new(pts, true)
+    }
+
+    #[test]
+    fn an_on_curve_node_lands_midway_on_the_arc_through_its_via_point_eased_out() {
+        let c = circle();
+        let (from, to) = (DVec3::new(0.2, 0.0, 0.0), DVec3::new(-0.2, 0.0, 0.0));
+        // half way from +x to −x by the +z side, 5 mm out: (0, 0, 0.105)
+        let (_, p) = on_curve_point(&c, from, to, DVec3::new(0.0, 0.0, 1.0), 0.5, 0.005).unwrap();
+        assert!(p.distance(DVec3::new(0.0, 0.0, 0.105)) < 1e-4, "{p}");
+        // by the −z side, a quarter of the way: at −45°
+        let (_, q) = on_curve_point(&c, from, to, DVec3::new(0.0, 0.0, -1.0), 0.25, 0.0).unwrap();
+        let at = DVec3::new(0.1 * 45f64.to_radians().cos(), 0.0, -0.1 * 45f64.to_radians().sin());
+        assert!(q.distance(at) < 1e-4, "{q}");
+        // a loop without length places nothing
+        assert!(on_curve_point(&Polyline::new(vec![DVec3::ZERO; 3], true), from, to, from, 0.5, 0.0).is_none());
+    }
 }

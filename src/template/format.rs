@@ -189,6 +189,44 @@ pub struct Drop {
     pub flare_m: f64,
 }
 
+/// A node placed along a body feature curve (an armhole node on the
+/// armscye): at the fraction [`OnCurve::fraction`] of the arc from the
+/// curve point nearest `from` to the curve point nearest `to`, taking the
+/// one of the two arcs between them whose midpoint lies nearer `via`, then
+/// eased outwards from the loop's centroid `c`:
+///
+/// ```text
+/// s = s_from + f·Δs,   p = γ(s) + r·(γ(s) − c)/|γ(s) − c|
+/// ```
+///
+/// `γ` the curve as the body derives it, `Δs` the signed arc length of the
+/// chosen arc, `f` the fraction, `r` [`OnCurve::radial_m`]. Eq. (1) ties a
+/// node to one feature point by a fixed offset in that point's frame; an
+/// armhole node about 80 mm from the armpit point then decodes inside a
+/// fuller chest (ASTM size 20: 28.6 mm inside). The curve is the body's
+/// own, so the node follows it on every body. Rotation- and
+/// translation-covariant (no world axis). Applied after Eq. (1), before the
+/// ring nodes, drops and hangs; a body that lacks the curve or a point
+/// keeps the Eq. (1) position.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OnCurve {
+    /// The node placed.
+    pub node: u32,
+    /// The closed feature curve it lies on.
+    pub curve: CurveId,
+    /// Feature point whose nearest curve point starts the arc.
+    pub from: PointId,
+    /// Feature point whose nearest curve point ends the arc.
+    pub to: PointId,
+    /// Of the two arcs between them, the one whose midpoint is nearer this point.
+    pub via: PointId,
+    /// Fraction of the arc from `from`, in `[0, 1]`.
+    pub fraction: f64,
+    /// Outward offset from the curve, m.
+    pub radial_m: f64,
+}
+
 /// Which relocation equation a decode uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -261,6 +299,10 @@ pub struct Template {
     /// before the hangs).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub drops: Vec<Drop>,
+    /// Nodes placed along a body curve (applied after Eq. (1), before the
+    /// ring nodes).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub on_curve: Vec<OnCurve>,
     /// Nodes that hang straight between two others (applied in order).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub hangs: Vec<Hang>,
@@ -575,6 +617,21 @@ impl Template {
                 return Err(bad("length and flare must be finite"));
             }
         }
+        for c in &self.on_curve {
+            let bad = |reason: &str| TemplateError::BadReference {
+                element: format!("on-curve placement of node {}", c.node),
+                reason: reason.into(),
+            };
+            if c.node as usize >= self.nodes.len() {
+                return Err(bad("needs an existing node"));
+            }
+            if !(c.fraction.is_finite() && (0.0..=1.0).contains(&c.fraction) && c.radial_m.is_finite()) {
+                return Err(bad("fraction must lie in [0, 1] and the offset be finite"));
+            }
+            if c.from == c.to {
+                return Err(bad("needs two distinct feature points"));
+            }
+        }
         for h in &self.hangs {
             let ids = [h.node, h.upper, h.lower];
             if ids.iter().any(|&v| v as usize >= self.nodes.len()) || h.node == h.upper || h.node == h.lower {
@@ -676,6 +733,7 @@ mod tests {
             notches: vec![],
             darts: vec![],
             drops: vec![],
+            on_curve: vec![],
             hangs: vec![],
             mirror_pairs: vec![],
             defaults: GradingDefaults::default(),
@@ -798,5 +856,42 @@ mod tests {
                 other => panic!("{bad:?}: {other:?}"),
             }
         }
+    }
+
+    #[test]
+    fn an_on_curve_placement_round_trips_and_bad_ones_name_the_node() {
+        let place = |node: u32, from: PointId, fraction: f64| OnCurve {
+            node,
+            curve: CurveId::ArmscyeLeft,
+            from,
+            to: PointId::UnderarmLeft,
+            via: PointId::ChestFront,
+            fraction,
+            radial_m: 0.006,
+        };
+        let mut t = tiny();
+        t.on_curve.push(place(2, PointId::ShoulderLeft, 0.5));
+        t.validate().unwrap();
+        assert_eq!(Template::from_json(&t.to_json()).unwrap(), t, "placements pass the schema and round-trip");
+        for bad in [
+            place(7, PointId::ShoulderLeft, 0.5),
+            place(1, PointId::ShoulderLeft, 1.5),
+            place(1, PointId::ShoulderLeft, f64::NAN),
+            place(1, PointId::UnderarmLeft, 0.5),
+        ] {
+            let mut t = tiny();
+            t.on_curve.push(bad);
+            match t.validate() {
+                Err(TemplateError::BadReference { element, .. }) => {
+                    assert_eq!(element, format!("on-curve placement of node {}", bad.node));
+                }
+                other => panic!("{bad:?}: {other:?}"),
+            }
+        }
+        // a fraction outside [0, 1] is refused by the schema too
+        let mut doc: serde_json::Value = serde_json::from_str(&t.to_json()).unwrap();
+        doc["on_curve"] = serde_json::json!([{"node": 1, "curve": "armscye_left", "from": "shoulder_left",
+            "to": "underarm_left", "via": "chest_front", "fraction": 2.0, "radial_m": 0.0}]);
+        assert!(matches!(Template::from_json(&doc.to_string()), Err(TemplateError::Schema(_))));
     }
 }

@@ -20,8 +20,8 @@ use std::collections::BTreeMap;
 use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
-use super::codec::{drop_axis, drop_position, encode, CodecError, Draft, DraftPanel, DraftSeam};
-use super::format::{Drop, Hang, Template, TemplateError};
+use super::codec::{drop_axis, drop_position, encode, on_curve_point, CodecError, Draft, DraftPanel, DraftSeam};
+use super::format::{Drop, Hang, OnCurve, Template, TemplateError};
 use super::girth;
 use crate::body::derive::{derive_features, DeriveOptions, FeatureError};
 use crate::body::feature::FeatureBody;
@@ -544,29 +544,36 @@ pub fn fitted_bodice(body: &FeatureBody, o: &BodiceOptions) -> Result<Template, 
         let n = b.body.points[&shoulder].frame.n;
         let sl = b.node(sp + n * (o.shoulder_lift_mm * MM), Some(shoulder));
         shoulders.push(sl);
-        // armhole nodes midway along the armscye, front and back of the arm
+        // armhole nodes midway along the armscye, front and back of the arm,
+        // between the shoulder point and the armscye point nearest the armpit
+        // point: placed there on every body (`OnCurve`), not by Eq. (1)
         let loop_ = b.curve(armscye)?.clone();
         let total = loop_.length();
+        let underarm = if side == 0 { P::UnderarmLeft } else { P::UnderarmRight };
+        let up = b.point(underarm)?;
         let s_top = loop_.closest(sp).map_or(0.0, |c| c.s);
-        let s_low = loop_.cumulative()[..loop_.points.len()]
-            .iter()
-            .zip(&loop_.points)
-            .min_by(|x, y| x.1.y.total_cmp(&y.1.y))
-            .map_or(0.0, |(s, _)| *s);
-        let mid_a = (s_top + 0.5 * (s_low - s_top).rem_euclid(total)).rem_euclid(total);
-        let mid_b = (s_low + 0.5 * (s_top - s_low).rem_euclid(total)).rem_euclid(total);
+        let s_low = loop_.closest(up).map_or(0.0, |c| c.s);
         let radial = o.armhole_ease_mm * MM / std::f64::consts::TAU;
         let horizontal = Plane { normal: DVec3::Y, offset: 0.0 };
         let armhole = Ring { nodes: Vec::new(), curve: loop_.clone(), params: Vec::new(), radial, plane: horizontal };
-        let ease_in_plane = |s: f64| {
-            let p = loop_.point_at(s);
-            p + (p - loop_.centroid()).normalize_or_zero() * radial
+        let on_armhole = |b: &mut Builder, via: PointId| -> Result<(u32, f64), AuthorError> {
+            let (from, to, v) = (sp, up, b.point(via)?);
+            let (s, p) = on_curve_point(&loop_, from, to, v, 0.5, radial)
+                .ok_or_else(|| AuthorError::Missing(armscye.to_string()))?;
+            let node = b.node(p, None);
+            b.draft.on_curve.push(OnCurve {
+                node,
+                curve: armscye,
+                from: shoulder,
+                to: underarm,
+                via,
+                fraction: 0.5,
+                radial_m: radial,
+            });
+            Ok((node, s))
         };
-        // the arc from the top that reaches the front first
-        let a_is_front = loop_.point_at(mid_a).z > loop_.point_at(mid_b).z;
-        let (s_front, s_back) = if a_is_front { (mid_a, mid_b) } else { (mid_b, mid_a) };
-        let af = b.node(ease_in_plane(s_front), None);
-        let ab = b.node(ease_in_plane(s_back), None);
+        let (af, s_front) = on_armhole(&mut b, P::ChestFront)?;
+        let (ab, s_back) = on_armhole(&mut b, P::ChestBack)?;
         let ul = chest.nodes[col];
         let ul_pos = b.draft.positions[ul as usize];
         let arc = |b: &Builder, s0: f64, s1: f64| -> Vec<DVec3> {
