@@ -61,6 +61,16 @@ fn main() {
             println!("{} worst residual {worst:.2} mm ({} rounds)", row.size, fitted.scaling_rounds);
         }
         let body = &fitted.body;
+        // MEASURE=a,b: the fitted body's measurements (mm)
+        if let Ok(names) = std::env::var("MEASURE") {
+            let m = grade3d::body::measure::measure(body, &Default::default());
+            let shown: Vec<String> = m
+                .iter()
+                .filter(|(id, _)| names.split(',').any(|n| n == id.as_str()))
+                .map(|(id, v)| format!("{id} {:.1}", v * 1e3))
+                .collect();
+            println!("{} measured: {}", row.size, shown.join(", "));
+        }
         if std::env::var("PARAMS").is_ok() {
             println!("{} params {:?}", row.size, serde_json::to_string(&fitted.params).unwrap());
             println!("{} scales {:?}", row.size, fitted.profile_scales);
