@@ -28,7 +28,7 @@ use crate::pattern::garment::{pattern_with_plan, DartPlan, GarmentPattern, Patte
 use crate::refine::clear::{clear_coarse, clear_surface, ClearError, ClearOptions};
 use crate::refine::collision::{Collider, CollisionOptions, CollisionReport};
 use crate::refine::subdivide::{refine, relax_tangentially, LevelReport, RefineError, RefineMesh, RefineOptions};
-use crate::refine::symmetry::{symmetrize, SymmetryOptions};
+use crate::refine::symmetry::{symmetrize, SymmetryOptions, Topology};
 use crate::template::codec::{decode, CodecError};
 use crate::template::format::Template;
 use crate::template::girth::{expected_ease, ring_curves, ring_loop};
@@ -255,7 +255,8 @@ pub fn grade_with_plan(
     let start = Instant::now();
     let cut_from = unlifted.as_deref().unwrap_or(&mesh.positions);
     // on a symmetric body the surface the pattern is cut from is made exactly symmetric
-    let symmetric = symmetrize(t, body, cut_from, &opts.symmetry);
+    let topology = Topology { triangles: &mesh.triangles, nodes: &decoded };
+    let symmetric = symmetrize(t, body, cut_from, Some(topology), &opts.symmetry);
     let cut_from = symmetric.as_deref().unwrap_or(cut_from);
     let pattern = pattern_with_plan(t, cut_from, &mesh.triangles, levels, size, &pattern_opts, plan)?;
     let pattern_ms = ms(start);

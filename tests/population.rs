@@ -19,6 +19,14 @@
 //! outside the body; those pairs are printed); a detected contact carries its
 //! warning; seam mismatch ≤ 1 mm; no flipped triangle, no self-crossing sew
 //! or cut line; the ease per declared girth within ±5 mm of the expected.
+//! Issue #14's bars on every grade: internal lines (dart legs, girth lines)
+//! simple and inside their piece; skirt and trouser pieces |E_s| ≤ 2 % and
+//! p95 edge strain ≤ 4 % (the trouser backs, still open, held to
+//! [`STRAIN_P95_OPEN`]); on the hm08 meshes (mirror-symmetric bodies) every
+//! template mirror pair cut as one piece and mirror images within 0.5 %
+//! (area, width, height) and 0.5 mm (sew lines). A scan-like copy is not
+//! symmetric (its re-meshing and noise differ left and right): its pairs'
+//! differences are printed.
 
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -32,6 +40,7 @@ use grade3d::geom::winding::{penetration_stats, WindingOptions, WindingTree};
 use grade3d::mannequin::landmarks::hm08_landmarks;
 use grade3d::mannequin::model::BodyModel;
 use grade3d::mannequin::population::{sample_population, scan_like};
+use grade3d::pattern::lines;
 use grade3d::pipeline::{grade, GradeOptions};
 use grade3d::template::library::builtin;
 
@@ -47,6 +56,22 @@ const SCAN_FACES: usize = 60_000;
 const NOISE_M: f64 = 1e-3;
 /// Issue #13's ease bar: measured ease within this of the expected, mm.
 const EASE_TOLERANCE_MM: f64 = 5.0;
+/// Issue #14's strain bar for skirt and trouser pieces (p95 edge strain).
+const STRAIN_P95: f64 = 0.04;
+/// Issue #14's area bar for skirt and trouser pieces (|E_s|).
+const AREA_ACCURACY: f64 = 0.02;
+/// The pieces whose strain bar is still open (`tests/pattern.rs`: the seat's
+/// saddle, which no waist dart reaches) and the ceiling they are held to.
+const STRAIN_OPEN: [&str; 2] = ["trousers left_back", "trousers right_back"];
+/// The ceiling of [`STRAIN_OPEN`] (p95 edge strain): a guard against
+/// regressions, not the bar. Measured 7.32 % at worst (pop39-scan's right
+/// back, whose found dart crossed its own legs once the seams were
+/// negotiated and is refused: clean lines come before a lower strain).
+const STRAIN_P95_OPEN: f64 = 0.075;
+/// Issue #14's mirror bar: area, width and height (%), sew lines (mm).
+const MIRROR_PCT: f64 = 0.5;
+/// See [`MIRROR_PCT`].
+const MIRROR_MM: f64 = 0.5;
 
 /// The bodies `range` of the population, each as (name, mesh, landmarks) in
 /// both forms.
@@ -89,6 +114,11 @@ fn run(range: std::ops::Range<usize>) {
     let mut failures: Vec<String> = Vec::new();
     let mut contacts: Vec<String> = Vec::new();
     let mut at_contact: Vec<String> = Vec::new();
+    // issue #14: worst |E_s| and mirror difference (mesh, scan), internal lines and open-bar pieces
+    let mut area: BTreeMap<String, Worst> = BTreeMap::new();
+    let (mut mirror_mesh, mut mirror_scan) = (Worst::default(), Worst::default());
+    let (mut internal_lines, mut open_over) = (0usize, Worst::default());
+    let mut open_count = 0usize;
     for (name, mesh, lm) in bodies(range) {
         let body = match derive_features(mesh, &lm, &DeriveOptions::default()) {
             Ok(b) => b,
@@ -157,6 +187,48 @@ fn run(range: std::ops::Range<usize>) {
                     ));
                 }
                 p95.entry(key.clone()).or_default().see(r.distortion.strain_p95, || at(&r.name));
+                if t.name != "fitted-bodice" {
+                    area.entry(key.clone()).or_default().see(d.area_accuracy.abs(), || at(&r.name));
+                    if d.area_accuracy.abs() > AREA_ACCURACY {
+                        failures.push(format!("{}: E_s {:.4}", at(&r.name), d.area_accuracy));
+                    }
+                    let open = STRAIN_OPEN.contains(&format!("{} {}", t.name, r.name).as_str());
+                    if open && d.strain_p95 > STRAIN_P95 {
+                        open_count += 1;
+                        open_over.see(d.strain_p95, || at(&r.name));
+                    }
+                    let ceiling = if open { STRAIN_P95_OPEN } else { STRAIN_P95 };
+                    if d.strain_p95 > ceiling {
+                        failures.push(format!("{}: p95 strain {:.4} over {ceiling}", at(&r.name), d.strain_p95));
+                    }
+                }
+            }
+            for piece in &g.pattern.pieces {
+                internal_lines += piece.internal_lines.len();
+                for e in lines::line_problems(piece) {
+                    failures.push(format!("{}: {e:?}", at(&piece.name)));
+                }
+            }
+            let scan = name.ends_with("-scan");
+            for pair in &g.pattern.cut_pairs {
+                let d = pair.difference;
+                let worst = d.area_pct.max(d.width_pct).max(d.height_pct);
+                let [l, r] = &pair.panels;
+                if scan {
+                    mirror_scan.see(d.sew_line_mm, || at(&format!("{l}/{r}")));
+                    continue;
+                }
+                mirror_mesh.see(d.sew_line_mm, || at(&format!("{l}/{r} ({worst:.3} %)")));
+                if !pair.cut_as_pair || worst > MIRROR_PCT || d.sew_line_mm > MIRROR_MM {
+                    failures.push(format!("{}: cut as a pair {}, {d:?}", at(&format!("{l}/{r}")), pair.cut_as_pair));
+                }
+            }
+            if !scan && g.pattern.cut_pairs.len() != t.mirror_pairs.len() {
+                failures.push(format!(
+                    "{}: {} of its mirror pairs judged",
+                    at("mirror pairs"),
+                    g.pattern.cut_pairs.len()
+                ));
             }
             let cut = g.cut_mesh().unwrap();
             for e in girth_ease(&body, &cut, t, &g.expected_ease_mm, &g.girth_lines, &EaseOptions::default()) {
@@ -192,6 +264,18 @@ fn run(range: std::ops::Range<usize>) {
     for ((t, girth), w) in &ease_err {
         eprintln!("{t} {girth}: worst |ease − expected| {:.1} mm ({})", w.0, w.1);
     }
+    for (t, w) in &area {
+        eprintln!("{t}: worst |E_s| {:.2} % ({})", w.0 * 100.0, w.1);
+    }
+    eprintln!(
+        "open strain bar {STRAIN_OPEN:?}: {open_count} pieces above p95 4 %, worst {:.2} % ({})",
+        open_over.0 * 100.0,
+        open_over.1
+    );
+    eprintln!(
+        "mirror pairs: hm08 meshes within {:.3} mm ({}); scan-like copies {:.2} mm ({}); internal lines {internal_lines}",
+        mirror_mesh.0, mirror_mesh.1, mirror_scan.0, mirror_scan.1
+    );
     eprintln!("surface clearing: {clear_ms:.0} ms over {grades} grades");
     eprintln!("bodies whose thighs press together: {}", contacts.len());
     for c in &contacts {

@@ -694,9 +694,13 @@ fn pattern_once(
             let p = assemble(t, panel, &seams, &lineage, &flat.uv, size, &opts.piece)?;
             let sew_line_self_intersects = self_intersects(&p.piece.sew_line);
             let cut_line_self_intersects = self_intersects(&p.piece.cut_line);
+            // a found dart whose lines as drawn on the piece are not clean (issue #14, item 5:
+            // legs that cross near a concave mouth after the seams are negotiated) is refused too
+            let unclean =
+                || super::lines::line_problems(&p.piece).iter().any(|e| found_darts.iter().any(|f| e.line() == f.name));
             if find_darts
                 && !found_darts.is_empty()
-                && (d.flipped > 0 || sew_line_self_intersects || cut_line_self_intersects)
+                && (d.flipped > 0 || sew_line_self_intersects || cut_line_self_intersects || unclean())
             {
                 cap[i] = found_darts.len() - 1;
                 // a mirrored panel's darts are its pair's: the pair gives one up

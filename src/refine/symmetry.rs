@@ -19,6 +19,21 @@
 //! [`SYMMETRY_PASSES`]) until every partner is mutual. A vertex that is its
 //! own partner lands on `P`.
 //!
+//! **Partners by topology.** Where the collision stage moved one side more
+//! than the vertex tolerance (a heavy woman's trouser front at the crotch:
+//! 8.6 mm, pop06), a nearest-vertex partner may be missing or wrong. So
+//! where the refined connectivity is given ([`Topology`]), the partners
+//! follow from it first: the template nodes (the refined mesh's first
+//! vertices: splits keep old ids) pair as their decoded positions mirror
+//! (within [`SymmetryOptions::body_tolerance_mm`]), and a mirror map of the
+//! mesh sends a triangle `(a, b, c)` to the one holding the reversed edge
+//! `(m(b), m(a))`, whose third corner is `m(c)`; the map spreads from
+//! triangle to triangle. It is used when it is a consistent involution
+//! covering every vertex and no partner lies farther than
+//! [`SymmetryOptions::pair_tolerance_mm`] from its mirror image; then one
+//! pass makes the surface exactly symmetric. Otherwise the nearest-vertex
+//! partners above.
+//!
 //! # Contract
 //!
 //! Input: the template (for nothing but its mirror pairs: a template without
@@ -54,11 +69,27 @@ pub struct SymmetryOptions {
     /// image, mm. Default 5 (the collision stage's asymmetry is below 3 mm;
     /// refined edges are 10–30 mm long).
     pub vertex_tolerance_mm: f64,
+    /// A partner found by topology ([`Topology`]) lies within this of its
+    /// vertex's mirror image, mm. Default 25 (the collision's asymmetry
+    /// measured up to 8.6 mm at a heavy woman's crotch; a body whose sides
+    /// differ by more is not a mannequin).
+    pub pair_tolerance_mm: f64,
+}
+
+/// The refined garment's connectivity, for partners by topology (module
+/// docs).
+#[derive(Debug, Clone, Copy)]
+pub struct Topology<'a> {
+    /// Triangles of the refined mesh.
+    pub triangles: &'a [[u32; 3]],
+    /// The template nodes as decoded on the body (before any collision):
+    /// vertices `0..nodes.len()` of the refined mesh.
+    pub nodes: &'a [DVec3],
 }
 
 impl Default for SymmetryOptions {
     fn default() -> Self {
-        Self { enabled: true, body_tolerance_mm: 0.5, vertex_tolerance_mm: 5.0 }
+        Self { enabled: true, body_tolerance_mm: 0.5, vertex_tolerance_mm: 5.0, pair_tolerance_mm: 25.0 }
     }
 }
 
@@ -80,7 +111,13 @@ fn body_plane(body: &FeatureBody) -> Option<((DVec3, f64), f64)> {
 }
 
 /// The symmetrised positions (module docs), or `None`.
-pub fn symmetrize(t: &Template, body: &FeatureBody, positions: &[DVec3], opts: &SymmetryOptions) -> Option<Vec<DVec3>> {
+pub fn symmetrize(
+    t: &Template,
+    body: &FeatureBody,
+    positions: &[DVec3],
+    topology: Option<Topology<'_>>,
+    opts: &SymmetryOptions,
+) -> Option<Vec<DVec3>> {
     if !opts.enabled || t.mirror_pairs.is_empty() || positions.is_empty() {
         return None;
     }
@@ -89,6 +126,14 @@ pub fn symmetrize(t: &Template, body: &FeatureBody, positions: &[DVec3], opts: &
         return None;
     }
     let mirror = |p: DVec3| p - 2.0 * (n.dot(p) - d) * n;
+    if let Some(partner) = topology.and_then(|top| partners_by_topology(top, positions, &mirror, opts)) {
+        let far = positions.iter().zip(&partner).map(|(&p, &w)| mirror(positions[w as usize]).distance(p));
+        if far.fold(0.0, f64::max) * 1e3 <= opts.pair_tolerance_mm {
+            return Some(
+                positions.iter().zip(&partner).map(|(&p, &w)| 0.5 * (p + mirror(positions[w as usize]))).collect(),
+            );
+        }
+    }
     let tol2 = (opts.vertex_tolerance_mm * 1e-3).powi(2);
     let mut out = positions.to_vec();
     for _ in 0..SYMMETRY_PASSES {
@@ -115,6 +160,88 @@ pub fn symmetrize(t: &Template, body: &FeatureBody, positions: &[DVec3], opts: &
     Some(out)
 }
 
+/// The mirror map of the refined mesh by topology (module docs), or `None`
+/// where the nodes do not pair or the connectivity is not mirrored.
+fn partners_by_topology(
+    top: Topology<'_>,
+    positions: &[DVec3],
+    mirror: &impl Fn(DVec3) -> DVec3,
+    opts: &SymmetryOptions,
+) -> Option<Vec<u32>> {
+    let vertices = positions.len();
+    if top.nodes.len() > vertices {
+        return None;
+    }
+    let mut partner: Vec<Option<u32>> = vec![None; vertices];
+    let tol = opts.body_tolerance_mm * 1e-3;
+    for (i, &p) in top.nodes.iter().enumerate() {
+        let m = mirror(p);
+        let (j, dist) = top
+            .nodes
+            .iter()
+            .enumerate()
+            .map(|(j, q)| (j, q.distance(m)))
+            .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)))?;
+        if dist > tol {
+            return None;
+        }
+        partner[i] = Some(j as u32);
+    }
+    // directed edge → the third corner of its triangle
+    let mut third: std::collections::HashMap<(u32, u32), u32> = std::collections::HashMap::new();
+    for &[a, b, c] in top.triangles {
+        if [a, b, c].iter().any(|&v| v as usize >= vertices) {
+            return None;
+        }
+        third.insert((a, b), c);
+        third.insert((b, c), a);
+        third.insert((c, a), b);
+    }
+    let mut next: Vec<Vec<u32>> = vec![Vec::new(); vertices];
+    for &(a, b) in third.keys() {
+        next[a as usize].push(b);
+        next[b as usize].push(a);
+    }
+    loop {
+        let mut changed = false;
+        for &[a, b, c] in top.triangles {
+            for (x, y, z) in [(a, b, c), (b, c, a), (c, a, b)] {
+                let (Some(px), Some(py)) = (partner[x as usize], partner[y as usize]) else { continue };
+                // the mirror reverses orientation: x→y maps to m(y)→m(x)
+                let &mz = third.get(&(py, px))?;
+                match partner[z as usize] {
+                    Some(known) if known != mz => return None,
+                    Some(_) => {}
+                    None => {
+                        partner[z as usize] = Some(mz);
+                        changed = true;
+                    }
+                }
+            }
+        }
+        if changed {
+            continue;
+        }
+        // no triangle has two paired corners: pair one neighbour `u` of a paired
+        // vertex `v` with the neighbour of m(v) nearest u's mirror image (a choice
+        // among a handful of vertices 10–30 mm apart), and spread from that edge
+        let Some((u, v)) = (0..vertices).find_map(|v| {
+            partner[v]?;
+            next[v].iter().find(|&&u| partner[u as usize].is_none()).map(|&u| (u, v))
+        }) else {
+            break;
+        };
+        let mv = partner[v]? as usize;
+        let target = mirror(positions[u as usize]);
+        let pick = next[mv].iter().copied().min_by(|&a, &b| {
+            positions[a as usize].distance(target).total_cmp(&positions[b as usize].distance(target))
+        })?;
+        partner[u as usize] = Some(pick);
+    }
+    let partner: Vec<u32> = partner.into_iter().collect::<Option<Vec<u32>>>()?;
+    partner.iter().enumerate().all(|(v, &w)| partner[w as usize] as usize == v).then_some(partner)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -138,7 +265,7 @@ mod tests {
         let mut positions: Vec<DVec3> = left.iter().copied().chain(left.iter().map(|&p| mirror(p))).collect();
         let planted = DVec3::new(0.001, -0.0015, 0.0005);
         positions[7] += planted;
-        let out = symmetrize(&trousers(), &body, &positions, &SymmetryOptions::default()).unwrap();
+        let out = symmetrize(&trousers(), &body, &positions, None, &SymmetryOptions::default()).unwrap();
         let k = left.len();
         for v in 0..k {
             assert!(mirror(out[v]).distance(out[v + k]) < 1e-12, "vertex {v} and its partner mirror");
@@ -157,13 +284,64 @@ mod tests {
         let positions = vec![DVec3::new(0.1, 1.0, 0.1), DVec3::new(-0.1, 1.0, 0.1)];
         let far = vec![DVec3::new(0.1, 1.0, 0.1), DVec3::new(-0.3, 1.0, 0.1)];
         let opts = SymmetryOptions::default();
-        assert!(symmetrize(&trousers(), &body, &far, &opts).is_none(), "no partner within 5 mm");
+        assert!(symmetrize(&trousers(), &body, &far, None, &opts).is_none(), "no partner within 5 mm");
         let mut skirt = trousers();
         skirt.mirror_pairs.clear();
-        assert!(symmetrize(&skirt, &body, &positions, &opts).is_none(), "no mirror pairs declared");
+        assert!(symmetrize(&skirt, &body, &positions, None, &opts).is_none(), "no mirror pairs declared");
         // a scan: one side's hip point 2 mm off its mirror image
         let hip = body.points.keys().copied().find(|k| k.as_str() == "hip_left").unwrap();
         body.points.get_mut(&hip).unwrap().position.y += 0.002;
-        assert!(symmetrize(&trousers(), &body, &positions, &opts).is_none(), "the body does not mirror");
+        assert!(symmetrize(&trousers(), &body, &positions, None, &opts).is_none(), "the body does not mirror");
+    }
+
+    #[test]
+    fn partners_by_topology_mend_an_asymmetry_beyond_the_vertex_tolerance() {
+        let body = reference_body().unwrap();
+        let ((n, d), _) = body_plane(&body).unwrap();
+        let mirror = |p: DVec3| p - 2.0 * (n.dot(p) - d) * n;
+        // a 5 × 3 grid 20 mm apart across the mid-sagittal plane, its corners (the
+        // "template nodes") first, the diagonals mirrored in the right half
+        let mut cells: Vec<(i32, i32)> = vec![(0, 0), (4, 0), (0, 2), (4, 2)];
+        cells.extend(
+            (0..3).flat_map(|j| (0..5).map(move |i| (i, j))).filter(|c| ![(0, 0), (4, 0), (0, 2), (4, 2)].contains(c)),
+        );
+        let id = |i: i32, j: i32| cells.iter().position(|&c| c == (i, j)).unwrap() as u32;
+        let at = |(i, j): (i32, i32)| d * n + n * (0.02 * f64::from(i - 2)) + DVec3::new(0.0, 0.02 * f64::from(j), 0.1);
+        let mut triangles = Vec::new();
+        for j in 0..2 {
+            for i in 0..4 {
+                let (p00, p10, p01, p11) = (id(i, j), id(i + 1, j), id(i, j + 1), id(i + 1, j + 1));
+                if i < 2 {
+                    triangles.extend([[p00, p10, p11], [p00, p11, p01]]);
+                } else {
+                    triangles.extend([[p00, p10, p01], [p10, p11, p01]]);
+                }
+            }
+        }
+        let exact: Vec<DVec3> = cells.iter().map(|&c| at(c)).collect();
+        let nodes = &exact[..4];
+        // one interior vertex 9 mm off: no nearest partner within 5 mm
+        let mut positions = exact.clone();
+        let v = id(1, 1) as usize;
+        positions[v] += n * 0.009;
+        let opts = SymmetryOptions::default();
+        assert!(symmetrize(&trousers(), &body, &positions, None, &opts).is_none(), "nearest vertices alone fail");
+        let top = Topology { triangles: &triangles, nodes };
+        let out = symmetrize(&trousers(), &body, &positions, Some(top), &opts).expect("partners by topology");
+        let w = id(3, 1) as usize;
+        assert!(mirror(out[v]).distance(out[w]) < 1e-12, "the pair mirrors exactly");
+        assert!(out[v].distance(exact[v] + n * 0.0045) < 1e-12, "each moved by half the asymmetry");
+        // the centre column lands on the plane; the rest stays
+        assert!((n.dot(out[id(2, 1) as usize]) - d).abs() < 1e-12);
+        for u in (0..cells.len()).filter(|&u| u != v && u != w) {
+            assert!(out[u].distance(exact[u]) < 1e-12, "vertex {u} was symmetric and stays");
+        }
+        // connectivity that is not mirrored (one diagonal flipped) gives no map: nearest vertices decide
+        let mut flipped = triangles.clone();
+        let (a, b, c, e) = (id(0, 0), id(1, 0), id(0, 1), id(1, 1));
+        flipped[0] = [a, b, c];
+        flipped[1] = [b, e, c];
+        let top = Topology { triangles: &flipped, nodes };
+        assert!(symmetrize(&trousers(), &body, &positions, Some(top), &opts).is_none());
     }
 }
