@@ -22,9 +22,8 @@
 //!    (the caller's flattening, which sews the new legs to equal length) and
 //!    keeps the candidate with the lowest 95th-percentile strain, provided
 //!    the flattening has no flipped triangle, the sew line (darts closed)
-//!    does not cross itself, every dart's straight legs (mouth → apex) and
-//!    its legs as drawn (along the slit: simple, inside the piece,
-//!    [`super::lines::shape_problems`]) stay inside the piece, every dart opens by at least the intake the
+//!    does not cross itself, every dart's straight legs (mouth → apex) stay
+//!    inside the piece, every dart opens by at least the intake the
 //!    caller asks for — a cut that wants to overlap marks a saddle, where a
 //!    dart cannot help — and the 95th percentile drops by at least
 //!    [`AutoDartOptions::min_gain`].
@@ -268,11 +267,6 @@ fn acceptable(panel: &Panel, trial: &Trial, min_intake: f64) -> Option<f64> {
         let (Some(&a), Some(&apex), Some(&b)) = (d.a.first(), d.a.last(), d.b.first()) else { return None };
         let (a, apex, b) = (uv[a as usize], uv[apex as usize], uv[b as usize]);
         if segment_crosses_polygon(a, apex, &sew) || segment_crosses_polygon(apex, b, &sew) {
-            return None;
-        }
-        // …and the legs as drawn (mouth → apex → mouth along the slit) simple and inside it
-        let drawn: Vec<DVec2> = d.a.iter().chain(d.b.iter().rev().skip(1)).map(|&v| uv[v as usize]).collect();
-        if !super::lines::shape_problems(&d.name, &drawn, &sew).is_empty() {
             return None;
         }
         let opening = dart_opening(&rim, uv, d)?;

@@ -694,10 +694,10 @@ fn pattern_once(
             let p = assemble(t, panel, &seams, &lineage, &flat.uv, size, &opts.piece)?;
             let sew_line_self_intersects = self_intersects(&p.piece.sew_line);
             let cut_line_self_intersects = self_intersects(&p.piece.cut_line);
-            // a found dart whose lines as drawn on the piece are not clean (issue #14, item 5:
-            // legs that cross near a concave mouth after the seams are negotiated) is refused too
-            let unclean =
-                || super::lines::line_problems(&p.piece).iter().any(|e| found_darts.iter().any(|f| e.line() == f.name));
+            // found darts that leave a line of the piece unclean (issue #14, item 5: legs that cross
+            // near a concave mouth once the seams are negotiated; a girth line pushed out of the
+            // piece by a dart's mouth) are refused too
+            let unclean = || !super::lines::line_problems(&p.piece).is_empty();
             if find_darts
                 && !found_darts.is_empty()
                 && (d.flipped > 0 || sew_line_self_intersects || cut_line_self_intersects || unclean())

@@ -101,8 +101,7 @@ pub fn line_problems(piece: &PatternPiece) -> Vec<LineProblem> {
 
 /// The shape checks of [`line_problems`] for one polyline `pts` in a piece
 /// whose sew line is `sew` (any rigid placement of both): simple, and
-/// inside the piece; not its ends. The dart search judges a candidate's
-/// legs by them before it keeps the dart ([`super::darts`]).
+/// inside the piece; not its ends.
 pub fn shape_problems(name: &str, pts: &[DVec2], sew: &[DVec2]) -> Vec<LineProblem> {
     let mut out = Vec::new();
     let segs = pts.len().saturating_sub(1);
