@@ -18,7 +18,7 @@ use grade3d::geom::winding::{WindingOptions, WindingTree};
 use grade3d::mannequin::fit::{fit_graded, fit_size, FitOptions};
 use grade3d::mannequin::model::BodyModel;
 use grade3d::mannequin::size_chart::{parse_csv, SizeChartOptions};
-use grade3d::pattern::grade::{governing_girths, grade_rules, nest_steps, nests, step_regularity, step_regularity_by};
+use grade3d::pattern::grade::{grade_rules, nest_steps, nests, step_regularity, step_regularity_governed};
 use grade3d::pattern::piece::PatternPiece;
 use grade3d::pipeline::{grade_with_plan, GradeOptions};
 use grade3d::template::library::builtin;
@@ -225,21 +225,14 @@ fn main() {
         }
     }
     let rules = grade_rules(&t.name, &sizes, &base).unwrap();
-    let girths: Vec<f64> = chart.rows.iter().map(|r| r.targets.get(&governing).copied().unwrap_or(0.0) * 1e3).collect();
-    let steps: Vec<f64> = girths.windows(2).map(|w| w[1] - w[0]).collect();
-    println!("chart steps of {governing:?}: {steps:?}");
+    let steps = chart.steps(governing).unwrap_or_default();
+    println!("chart steps of {governing:?}, m: {steps:?}");
     // each grade point read against the chart steps of its own girth, where the chart
     // gives it (ONE_GIRTH=1: every point against the one governing girth)
-    let steps_of = |m: MeasurementId| -> Option<Vec<f64>> {
-        let g: Option<Vec<f64>> = chart.rows.iter().map(|r| r.targets.get(&m).map(|v| v * 1e3)).collect();
-        g.map(|g| g.windows(2).map(|w| w[1] - w[0]).collect())
-    };
     let reg = if std::env::var("ONE_GIRTH").is_ok() {
         step_regularity(&rules, Some(&steps))
     } else {
-        step_regularity_by(&rules, |node| {
-            governing_girths(&t, node).into_iter().find_map(steps_of).or_else(|| Some(steps.clone()))
-        })
+        step_regularity_governed(&rules, &t, |m| chart.steps(m), governing)
     };
     let over = reg.iter().filter(|r| r.worst_mm > r.allowed_mm).count();
     let signs: usize = reg.iter().map(|r| r.sign_changes).sum();

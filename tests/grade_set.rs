@@ -30,7 +30,7 @@ use grade3d::geom::winding::{WindingOptions, WindingTree};
 use grade3d::mannequin::fit::{fit_chart, FitOptions};
 use grade3d::mannequin::model::BodyModel;
 use grade3d::mannequin::size_chart::{parse_csv, SizeChartOptions};
-use grade3d::pattern::grade::{governing_girths, grade_rules, nest_steps, nests, step_regularity_by};
+use grade3d::pattern::grade::{grade_rules, nest_steps, nests, step_regularity_governed};
 use grade3d::pattern::piece::PatternPiece;
 use grade3d::pattern::true_up::{true_nest, TrueOptions};
 use grade3d::pipeline::{grade_with_plan, GradeOptions};
@@ -82,11 +82,6 @@ fn grade_set(chart: &str, base_size: &str, nest_bar: &[&str], step_bar: &[&str])
             maps: gpu.render(&f.body.mesh, &RenderOptions::default()).unwrap(),
             tree: WindingTree::new(&f.body.mesh, &WindingOptions::default()),
         })
-        .collect();
-    let hip_steps: Vec<f64> = chart
-        .rows
-        .windows(2)
-        .map(|w| (w[1].targets[&MeasurementId::HipGirth] - w[0].targets[&MeasurementId::HipGirth]) * 1e3)
         .collect();
     let mut failures = Vec::new();
     for t in &builtin().unwrap() {
@@ -154,13 +149,7 @@ fn grade_set(chart: &str, base_size: &str, nest_bar: &[&str], step_bar: &[&str])
         }
         let rules = grade_rules(&t.name, &sizes, base_size).unwrap();
         // each grade point against its own girth's chart steps, else the hip's
-        let steps_of = |m: MeasurementId| -> Option<Vec<f64>> {
-            let g: Option<Vec<f64>> = chart.rows.iter().map(|r| r.targets.get(&m).map(|v| v * 1e3)).collect();
-            g.map(|g| g.windows(2).map(|w| w[1] - w[0]).collect())
-        };
-        let reg = step_regularity_by(&rules, |node| {
-            governing_girths(t, node).into_iter().find_map(steps_of).or_else(|| Some(hip_steps.clone()))
-        });
+        let reg = step_regularity_governed(&rules, t, |m| chart.steps(m), MeasurementId::HipGirth);
         let worst = reg.iter().max_by(|a, b| (a.worst_mm - a.allowed_mm).total_cmp(&(b.worst_mm - b.allowed_mm)));
         eprintln!(
             "{}: {} grade points, worst step deviation {}",

@@ -17,7 +17,7 @@ use grade3d::collide::render::{GpuContext, RenderOptions};
 use grade3d::geom::winding::{penetration_stats, WindingOptions, WindingTree};
 use grade3d::pattern::export::{dxf, rul, svg};
 use grade3d::pattern::garment::DartPlan;
-use grade3d::pattern::grade::{governing_girths, grade_rules, nest_steps, nests, step_regularity, step_regularity_by};
+use grade3d::pattern::grade::{grade_rules, nest_steps, nests, step_regularity, step_regularity_governed};
 use grade3d::pattern::lines;
 use grade3d::pattern::piece::PatternPiece;
 use grade3d::pattern::true_up::{true_nest, TrueOptions};
@@ -328,9 +328,7 @@ fn patterns_on_every_body_meet_the_bars() {
             girths.map(|g| g.windows(2).map(|w| w[1] - w[0]).collect())
         };
         let one = step_regularity(&rules, steps_of(governing).as_deref());
-        let own = step_regularity_by(&rules, |node| {
-            governing_girths(template, node).into_iter().find_map(steps_of).or_else(|| steps_of(governing))
-        });
+        let own = step_regularity_governed(&rules, template, steps_of, governing);
         for (reading, reg) in [(format!("the {governing} steps"), &one), ("each point's own girth".into(), &own)] {
             let over = reg.iter().filter(|r| r.worst_mm > r.allowed_mm).count();
             let signs: usize = reg.iter().map(|r| r.sign_changes).sum();

@@ -123,6 +123,15 @@ pub struct SizeChart {
     pub rows: Vec<SizeRow>,
 }
 
+impl SizeChart {
+    /// The chart steps of measurement `m` between consecutive rows, m
+    /// (`rows[k+1] − rows[k]`); `None` where a row lacks it.
+    pub fn steps(&self, m: MeasurementId) -> Option<Vec<f64>> {
+        let values: Option<Vec<f64>> = self.rows.iter().map(|r| r.targets.get(&m).copied()).collect();
+        values.map(|v| v.windows(2).map(|w| w[1] - w[0]).collect())
+    }
+}
+
 /// Limits on a size chart.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default)]

@@ -257,6 +257,21 @@ pub fn step_regularity_by(
     out
 }
 
+/// [`step_regularity_by`] with each grade point read against the chart
+/// steps of its own governing girth ([`governing_girths`] of template `t`,
+/// the first that `chart_steps` gives), else those of `fallback` (the
+/// template's own girth: the bust for a bodice, the hip below the waist).
+pub fn step_regularity_governed(
+    table: &GradeRuleTable,
+    t: &Template,
+    chart_steps: impl Fn(MeasurementId) -> Option<Vec<f64>>,
+    fallback: MeasurementId,
+) -> Vec<StepRegularity> {
+    step_regularity_by(table, |node| {
+        governing_girths(t, node).into_iter().find_map(&chart_steps).or_else(|| chart_steps(fallback))
+    })
+}
+
 /// The girths that govern how template node `node` grades, nearest first
 /// (issue #14, item 4): for a node placed along a body curve
 /// ([`crate::template::format::OnCurve`]) the girth along that curve, then

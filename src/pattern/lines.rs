@@ -58,17 +58,6 @@ pub enum LineProblem {
     },
 }
 
-impl LineProblem {
-    /// The name of the line it concerns.
-    pub fn line(&self) -> &str {
-        match self {
-            LineProblem::SelfCrossing { line, .. }
-            | LineProblem::OutsidePiece { line, .. }
-            | LineProblem::LooseEnd { line, .. } => line,
-        }
-    }
-}
-
 /// Every [`LineProblem`] of `piece`'s internal lines (module docs).
 pub fn line_problems(piece: &PatternPiece) -> Vec<LineProblem> {
     let sew = &piece.sew_line;
@@ -87,40 +76,31 @@ pub fn line_problems(piece: &PatternPiece) -> Vec<LineProblem> {
             out.push(LineProblem::LooseEnd { line: name(), distance_mm: f64::INFINITY });
             continue;
         }
-        out.extend(shape_problems(&line.name, pts, sew));
+        let segs = pts.len() - 1;
+        for i in 0..segs {
+            for j in i + 2..segs {
+                if segments_cross(pts[i], pts[i + 1], pts[j], pts[j + 1]) {
+                    out.push(LineProblem::SelfCrossing { line: name(), segments: [i, j] });
+                }
+            }
+        }
+        for (k, &p) in pts.iter().enumerate() {
+            let d = to_sew(p);
+            if !point_in_polygon(sew, p) && d > LINE_TOUCH_MM {
+                out.push(LineProblem::OutsidePiece { line: name(), at: k, distance_mm: d });
+            }
+        }
+        for i in 0..segs {
+            if segment_crosses_polygon(pts[i], pts[i + 1], sew) {
+                out.push(LineProblem::OutsidePiece { line: name(), at: i, distance_mm: 0.0 });
+            }
+        }
         for end in [pts[0], pts[pts.len() - 1]] {
             let d = to_sew(end);
             let at_apex = apexes.iter().any(|a| a.distance(end) <= LINE_TOUCH_MM);
             if d > LINE_TOUCH_MM && !at_apex {
                 out.push(LineProblem::LooseEnd { line: name(), distance_mm: d });
             }
-        }
-    }
-    out
-}
-
-/// The shape checks of [`line_problems`] for one polyline `pts` in a piece
-/// whose sew line is `sew` (any rigid placement of both): simple, and
-/// inside the piece; not its ends.
-pub fn shape_problems(name: &str, pts: &[DVec2], sew: &[DVec2]) -> Vec<LineProblem> {
-    let mut out = Vec::new();
-    let segs = pts.len().saturating_sub(1);
-    for i in 0..segs {
-        for j in i + 2..segs {
-            if segments_cross(pts[i], pts[i + 1], pts[j], pts[j + 1]) {
-                out.push(LineProblem::SelfCrossing { line: name.to_owned(), segments: [i, j] });
-            }
-        }
-    }
-    for (k, &p) in pts.iter().enumerate() {
-        let d = distance_to_polygon(sew, p);
-        if !point_in_polygon(sew, p) && d > LINE_TOUCH_MM {
-            out.push(LineProblem::OutsidePiece { line: name.to_owned(), at: k, distance_mm: d });
-        }
-    }
-    for i in 0..segs {
-        if segment_crosses_polygon(pts[i], pts[i + 1], sew) {
-            out.push(LineProblem::OutsidePiece { line: name.to_owned(), at: i, distance_mm: 0.0 });
         }
     }
     out

@@ -38,10 +38,11 @@ use super::format::{
     Dart, Drop, Edge, Face, GradingDefaults, GrainLine, Hang, Node, Notch, OnCurve, Panel, Relocation, Seam, Template,
     TemplateError, SCHEMA_ID, SCHEMA_VERSION,
 };
-use super::girth::{girth_plane, place_ring_nodes, refit_rings};
+use super::girth::{eased, eased_arc, girth_plane, place_ring_nodes, refit_rings, shorter_way};
 use super::profile::{Profile, ProfileError};
 use crate::body::feature::FeatureBody;
 use crate::body::vocab::{CurveId, PointId, VOCABULARY_VERSION};
+use crate::geom::plane::Plane;
 use crate::geom::polyline::Polyline;
 
 /// Why encoding or decoding failed.
@@ -337,13 +338,13 @@ pub fn drop_nodes(drops: &[Drop], body: &FeatureBody, positions: &mut [DVec3]) -
 
 /// The parameter on `loop_` of an [`OnCurve`] placement and the point
 /// there: `s_from + f·Δs` along the arc from `from`'s nearest point to
-/// `to`'s whose midpoint is nearer `via` (formula at [`OnCurve`]); `None`
-/// for a loop without length.
+/// `to`'s whose midpoint is nearer `via`, eased within `plane`
+/// ([`super::girth::eased`]; formula at [`OnCurve`]); `None` for a loop
+/// without length.
 pub fn on_curve_point(
     loop_: &Polyline,
-    from: DVec3,
-    to: DVec3,
-    via: DVec3,
+    plane: &Plane,
+    (from, to, via): (DVec3, DVec3, DVec3),
     fraction: f64,
     radial: f64,
 ) -> Option<(f64, DVec3)> {
@@ -357,13 +358,7 @@ pub fn on_curve_point(
     let mid = |d: f64| loop_.point_at((s0 + 0.5 * d).rem_euclid(total)).distance(via);
     let d = if mid(forward) <= mid(backward) { forward } else { backward };
     let s = (s0 + fraction * d).rem_euclid(total);
-    Some((s, eased_from_centroid(loop_, s, radial)))
-}
-
-/// `γ(s) + r·(γ(s) − c)/|γ(s) − c|`, `c` the loop's centroid.
-fn eased_from_centroid(loop_: &Polyline, s: f64, radial: f64) -> DVec3 {
-    let c = loop_.point_at(s);
-    c + (c - loop_.centroid()).normalize_or_zero() * radial
+    Some((s, eased(loop_, s, radial, plane)))
 }
 
 /// Places each [`OnCurve`] node on the body's curve. Returns the nodes
@@ -373,12 +368,14 @@ pub fn on_curve_nodes(placements: &[OnCurve], body: &FeatureBody, positions: &mu
     let mut placed = Vec::new();
     for c in placements {
         let point = |id: PointId| body.points.get(&id).map(|q| q.position);
-        let (Some(curve), Some(from), Some(to), Some(via)) =
-            (body.curves.get(&c.curve), point(c.from), point(c.to), point(c.via))
+        let (Some(curve), Some(plane), Some(from), Some(to), Some(via)) =
+            (body.curves.get(&c.curve), girth_plane(body, c.curve), point(c.from), point(c.to), point(c.via))
         else {
             continue;
         };
-        let Some((s, p)) = on_curve_point(&curve.polyline, from, to, via, c.fraction, c.radial_m) else { continue };
+        let Some((s, p)) = on_curve_point(&curve.polyline, &plane, (from, to, via), c.fraction, c.radial_m) else {
+            continue;
+        };
         if let Some(slot) = positions.get_mut(c.node as usize) {
             *slot = p;
             placed.push((c.node, s));
@@ -398,7 +395,8 @@ pub fn on_curve_nodes(placements: &[OnCurve], body: &FeatureBody, positions: &mu
 /// Q_k = γ̃(s_a + (k/(n−1))·Δs) + (1 − k/(n−1))·(p_a − γ̃(s_a)) + (k/(n−1))·(p_b − γ̃(s_b))
 /// ```
 ///
-/// `γ̃` the curve eased by the placement's offset ([`OnCurve`]), `n` the
+/// `γ̃` the curve eased by the placement's offset within its plane
+/// ([`super::girth::eased_arc`], ends bent onto the nodes), `n` the
 /// profile's point count, `p_a`, `p_b` the decoded end nodes. Eq. (5)'s
 /// affine copy of the reference body's armhole turns with the chord between
 /// its nodes, and on a heavy man's scan (pop31) swung the armhole's lower
@@ -416,7 +414,10 @@ pub fn refit_on_curve_edges(
     let mut refitted = 0;
     let curves: std::collections::BTreeSet<CurveId> = t.on_curve.iter().map(|c| c.curve).collect();
     for curve in curves {
-        let Some(loop_) = body.curves.get(&curve).map(|c| &c.polyline) else { continue };
+        let (Some(loop_), Some(plane)) = (body.curves.get(&curve).map(|c| &c.polyline), girth_plane(body, curve))
+        else {
+            continue;
+        };
         let total = loop_.length();
         let ours: Vec<&OnCurve> = t.on_curve.iter().filter(|c| c.curve == curve).collect();
         let radial = ours.iter().map(|c| c.radial_m).sum::<f64>() / ours.len().max(1) as f64;
@@ -429,29 +430,17 @@ pub fn refit_on_curve_edges(
                 }
             }
         }
-        let on: Vec<u32> = placed.iter().filter(|(v, _)| ours.iter().any(|c| c.node == *v)).map(|&(v, _)| v).collect();
-        params.extend(placed.iter().filter(|(v, _)| on.contains(v)).copied());
+        let on: Vec<(u32, f64)> = placed.iter().filter(|(v, _)| ours.iter().any(|c| c.node == *v)).copied().collect();
+        params.extend(on.iter().copied());
         for (i, e) in t.edges.iter().enumerate() {
             let (Some(&sa), Some(&sb)) = (params.get(&e.start), params.get(&e.end)) else { continue };
-            if !(on.contains(&e.start) || on.contains(&e.end)) {
+            if !on.iter().any(|&(v, _)| v == e.start || v == e.end) {
                 continue;
             }
             let Some(Some(old)) = profiles.get(i) else { continue };
             let n = old.points().len().max(2);
-            let d = super::girth::shorter_way(sa, sb, total);
-            let (pa, pb) = (positions[e.start as usize], positions[e.end as usize]);
-            let (qa, qb) = (eased_from_centroid(loop_, sa, radial), eased_from_centroid(loop_, sb, radial));
-            let mut pts: Vec<DVec3> = (0..n)
-                .map(|k| {
-                    let w = k as f64 / (n - 1) as f64;
-                    eased_from_centroid(loop_, (sa + w * d).rem_euclid(total), radial)
-                        + (1.0 - w) * (pa - qa)
-                        + w * (pb - qb)
-                })
-                .collect();
-            // the ends exactly on the nodes (the sums above round)
-            pts[0] = pa;
-            pts[n - 1] = pb;
+            let ends = (Some(positions[e.start as usize]), Some(positions[e.end as usize]));
+            let pts = eased_arc(loop_, &plane, sa, shorter_way(sa, sb, total), n, radial, ends);
             profiles[i] = Some(Profile::new(pts).map_err(|source| (i as u32, source))?);
             refitted += 1;
         }
@@ -576,15 +565,18 @@ mod tests {
     #[test]
     fn an_on_curve_node_lands_midway_on_the_arc_through_its_via_point_eased_out() {
         let c = circle();
+        let plane = Plane { normal: DVec3::Y, offset: 0.0 };
         let (from, to) = (DVec3::new(0.2, 0.0, 0.0), DVec3::new(-0.2, 0.0, 0.0));
         // half way from +x to −x by the +z side, 5 mm out: (0, 0, 0.105)
-        let (_, p) = on_curve_point(&c, from, to, DVec3::new(0.0, 0.0, 1.0), 0.5, 0.005).unwrap();
+        let (_, p) = on_curve_point(&c, &plane, (from, to, DVec3::new(0.0, 0.0, 1.0)), 0.5, 0.005).unwrap();
         assert!(p.distance(DVec3::new(0.0, 0.0, 0.105)) < 1e-4, "{p}");
         // by the −z side, a quarter of the way: at −45°
-        let (_, q) = on_curve_point(&c, from, to, DVec3::new(0.0, 0.0, -1.0), 0.25, 0.0).unwrap();
+        let (_, q) = on_curve_point(&c, &plane, (from, to, DVec3::new(0.0, 0.0, -1.0)), 0.25, 0.0).unwrap();
         let at = DVec3::new(0.1 * 45f64.to_radians().cos(), 0.0, -0.1 * 45f64.to_radians().sin());
         assert!(q.distance(at) < 1e-4, "{q}");
         // a loop without length places nothing
-        assert!(on_curve_point(&Polyline::new(vec![DVec3::ZERO; 3], true), from, to, from, 0.5, 0.0).is_none());
+        assert!(
+            on_curve_point(&Polyline::new(vec![DVec3::ZERO; 3], true), &plane, (from, to, from), 0.5, 0.0).is_none()
+        );
     }
 }

@@ -193,10 +193,11 @@ pub struct Drop {
 /// armscye): at the fraction [`OnCurve::fraction`] of the arc from the
 /// curve point nearest `from` to the curve point nearest `to`, taking the
 /// one of the two arcs between them whose midpoint lies nearer `via`, then
-/// eased outwards from the loop's centroid `c`:
+/// eased outwards from the loop's centroid `c` within the curve's plane
+/// (normal `n`):
 ///
 /// ```text
-/// s = s_from + f·Δs,   p = γ(s) + r·(γ(s) − c)/|γ(s) − c|
+/// s = s_from + f·Δs,   d = γ(s) − c,   p = γ(s) + r·(d − (d·n)n)/|d − (d·n)n|
 /// ```
 ///
 /// `γ` the curve as the body derives it, `Δs` the signed arc length of the

@@ -554,11 +554,10 @@ pub fn fitted_bodice(body: &FeatureBody, o: &BodiceOptions) -> Result<Template, 
         let s_top = loop_.closest(sp).map_or(0.0, |c| c.s);
         let s_low = loop_.closest(up).map_or(0.0, |c| c.s);
         let radial = o.armhole_ease_mm * MM / std::f64::consts::TAU;
-        let horizontal = Plane { normal: DVec3::Y, offset: 0.0 };
-        let armhole = Ring { nodes: Vec::new(), curve: loop_.clone(), params: Vec::new(), radial, plane: horizontal };
+        let plane = girth::girth_plane(b.body, armscye).ok_or_else(|| AuthorError::Missing(armscye.to_string()))?;
         let on_armhole = |b: &mut Builder, via: PointId| -> Result<(u32, f64), AuthorError> {
-            let (from, to, v) = (sp, up, b.point(via)?);
-            let (s, p) = on_curve_point(&loop_, from, to, v, 0.5, radial)
+            let v = b.point(via)?;
+            let (s, p) = on_curve_point(&loop_, &plane, (sp, up, v), 0.5, radial)
                 .ok_or_else(|| AuthorError::Missing(armscye.to_string()))?;
             let node = b.node(p, None);
             b.draft.on_curve.push(OnCurve {
@@ -576,23 +575,18 @@ pub fn fitted_bodice(body: &FeatureBody, o: &BodiceOptions) -> Result<Template, 
         let (ab, s_back) = on_armhole(&mut b, P::ChestBack)?;
         let ul = chest.nodes[col];
         let ul_pos = b.draft.positions[ul as usize];
+        // the armhole's edges along the eased armscye, the shorter way round (decoding samples
+        // them again on every body: `codec::refit_on_curve_edges`)
         let arc = |b: &Builder, s0: f64, s1: f64| -> Vec<DVec3> {
-            // the shorter way round from s0 to s1
-            let fwd = (s1 - s0).rem_euclid(total);
-            let (from, to, rev) = if fwd <= total - fwd { (s0, s1, false) } else { (s1, s0, true) };
-            let mut pts: Vec<DVec3> = b
-                .ring_arc(&armhole, from, to)
-                .into_iter()
-                .map(|p| {
-                    // ring_arc eases horizontally; armholes ease in their own plane
-                    let c = loop_.closest(p).map_or(p, |c| c.point);
-                    c + (c - loop_.centroid()).normalize_or_zero() * radial
-                })
-                .collect();
-            if rev {
-                pts.reverse();
-            }
-            pts
+            girth::eased_arc(
+                &loop_,
+                &plane,
+                s0,
+                girth::shorter_way(s0, s1, total),
+                b.profile_points,
+                radial,
+                (None, None),
+            )
         };
         let p_top = arc(&b, s_top, s_front);
         b.draft.profiles.push(((sl, af), p_top));
