@@ -232,7 +232,7 @@ fn main() {
     let reg = if std::env::var("ONE_GIRTH").is_ok() {
         step_regularity(&rules, Some(&steps))
     } else {
-        step_regularity_governed(&rules, &t, |m| chart.steps(m), governing)
+        step_regularity_governed(&rules, &t, |m| chart.steps(m))
     };
     let over = reg.iter().filter(|r| r.worst_mm > r.allowed_mm).count();
     let signs: usize = reg.iter().map(|r| r.sign_changes).sum();

@@ -298,6 +298,28 @@ impl Polyline {
         self.points.iter().copied().sum::<DVec3>() / self.points.len() as f64
     }
 
+    /// Centroid of the curve as a wire of uniform density,
+    /// `Σ ½(a_i + b_i)·|b_i − a_i| / Σ |b_i − a_i|` over its segments (the
+    /// closing one too, where closed): unlike [`Polyline::centroid`] it does
+    /// not depend on how densely the curve is sampled, so a plane section
+    /// whose crossed mesh edges change from one body to the next keeps a
+    /// centroid that moves continuously with the body. The vertex centroid
+    /// where the curve has no length.
+    pub fn length_centroid(&self) -> DVec3 {
+        let (mut sum, mut total) = (DVec3::ZERO, 0.0);
+        for i in 0..self.segment_count() {
+            let (a, b) = self.segment(i);
+            let l = a.distance(b);
+            sum += 0.5 * (a + b) * l;
+            total += l;
+        }
+        if total > 0.0 {
+            sum / total
+        } else {
+            self.centroid()
+        }
+    }
+
     /// Points projected into the 2D coordinates of `plane`'s basis.
     pub fn to_plane_2d(&self, plane: &Plane) -> Vec<DVec2> {
         let (u, v) = plane.basis();
@@ -500,6 +522,22 @@ mod tests {
         assert!((c.length() - exact).abs() < 1e-12);
         let plane = Plane::from_point_normal(DVec3::ZERO, DVec3::Y).unwrap();
         assert!((tape_length(&[&c], &plane) - exact).abs() < 1e-9);
+    }
+
+    #[test]
+    fn length_centroid_does_not_follow_the_sampling() {
+        // a 2 × 2 square about the origin, its front side (y = 1) sampled by 40 points
+        let mut pts = vec![DVec3::new(-1.0, -1.0, 0.0), DVec3::new(1.0, -1.0, 0.0)];
+        pts.extend((0..=40).map(|i| DVec3::new(1.0 - 2.0 * i as f64 / 40.0, 1.0, 0.0)));
+        let square = Polyline::new(pts, true);
+        assert!(square.centroid().y > 0.8, "the vertex centroid follows the dense side");
+        assert!(square.length_centroid().length() < 1e-12, "{}", square.length_centroid());
+        // an open L: legs of length 2 and 1 from the corner
+        let l = Polyline::new(vec![DVec3::new(2.0, 0.0, 0.0), DVec3::ZERO, DVec3::new(0.0, 1.0, 0.0)], false);
+        assert!(l.length_centroid().distance(DVec3::new(2.0 / 3.0, 1.0 / 6.0, 0.0)) < 1e-12);
+        // no length: the vertex centroid
+        let dot = Polyline::new(vec![DVec3::ONE, DVec3::ONE], false);
+        assert_eq!(dot.length_centroid(), DVec3::ONE);
     }
 
     #[test]

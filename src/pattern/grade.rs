@@ -198,8 +198,8 @@ pub struct StepRegularity {
     pub worst_mm: f64,
     /// What the bar allows: `max(2 mm, 25 % of |mean step|)`, mm.
     pub allowed_mm: f64,
-    /// Steps whose x or y runs against the mean step's by more than
-    /// [`STEP_SIGN_TOLERANCE_MM`] (a grade point that moves back).
+    /// Steps whose x or y as cut (unscaled) runs against the mean step's by
+    /// more than [`STEP_SIGN_TOLERANCE_MM`] (a grade point that moves back).
     pub sign_changes: usize,
 }
 
@@ -207,24 +207,45 @@ pub struct StepRegularity {
 /// pattern maker's ruler shows).
 pub const STEP_SIGN_TOLERANCE_MM: f64 = 0.5;
 
+/// The chart steps that one grade point's steps are read against, per axis
+/// of the piece (one per consecutive pair of sizes, any unit): `x` across
+/// the grain (a width: the girth the point lies on), `y` along it (a
+/// length: the stature, or where the chart grades no length the girth that
+/// lengthens the piece). `None` reads that axis unscaled.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct AxisSteps {
+    /// Chart steps that the step's x (across the grain) is scaled by.
+    pub x: Option<Vec<f64>>,
+    /// Chart steps that the step's y (along the grain) is scaled by.
+    pub y: Option<Vec<f64>>,
+}
+
+impl AxisSteps {
+    /// The same chart steps for both axes (one governing girth).
+    pub fn both(steps: Option<Vec<f64>>) -> Self {
+        Self { x: steps.clone(), y: steps }
+    }
+}
+
 /// The step regularity of every grade point of `table`; `chart_steps`, where
 /// given (one per consecutive pair of sizes, any unit), are the chart steps
 /// of the governing girth that the grade steps are scaled by (an uneven
-/// chart).
+/// chart), both axes alike.
 pub fn step_regularity(table: &GradeRuleTable, chart_steps: Option<&[f64]>) -> Vec<StepRegularity> {
-    step_regularity_by(table, |_| chart_steps.map(<[f64]>::to_vec))
+    step_regularity_by(table, |_| AxisSteps::both(chart_steps.map(<[f64]>::to_vec)))
 }
 
-/// [`step_regularity`] with each grade point's own governing girth:
-/// `chart_steps(node)` gives the chart steps that the steps of the grade
-/// point at template node `node` are scaled by (the girth it lies on,
-/// [`governing_girths`]), `None` to read them unscaled. A step `Δ_k` becomes
-/// `Δ_k · w̄ / w_k`, `w_k` the chart step and `w̄` their mean; chart steps
-/// of the wrong count or not all positive are ignored.
-pub fn step_regularity_by(
-    table: &GradeRuleTable,
-    chart_steps: impl Fn(u32) -> Option<Vec<f64>>,
-) -> Vec<StepRegularity> {
+/// [`step_regularity`] with each grade point's own chart steps, per axis:
+/// `chart_steps(node)` gives the steps that the x and the y of the grade
+/// point at template node `node` are scaled by ([`step_regularity_governed`]
+/// picks them). A step `Δ_k` becomes `(Δx_k · w̄x / wx_k, Δy_k · w̄y / wy_k)`,
+/// `w_k` the axis' chart step and `w̄` their mean; chart steps of the wrong
+/// count or not all positive leave that axis unscaled.
+///
+/// A step *runs back* (a sign change) where its component as cut — the
+/// move a pattern maker's ruler shows, before any scaling — opposes the
+/// mean step's by more than [`STEP_SIGN_TOLERANCE_MM`].
+pub fn step_regularity_by(table: &GradeRuleTable, chart_steps: impl Fn(u32) -> AxisSteps) -> Vec<StepRegularity> {
     let mut out = Vec::new();
     for piece in &table.pieces {
         for r in &piece.rules {
@@ -233,17 +254,22 @@ pub fn step_regularity_by(
                 continue;
             }
             let chart = chart_steps(r.node);
-            let steps: Vec<DVec2> = match chart.filter(|c| c.len() == raw.len() && c.iter().all(|&w| w > 0.0)) {
-                Some(c) => {
-                    let mean_w = c.iter().sum::<f64>() / c.len() as f64;
-                    raw.iter().zip(&c).map(|(s, w)| *s * (mean_w / w)).collect()
+            // per axis, the factor `w̄ / w_k` of each step (1 where unscaled)
+            let factors = |c: Option<Vec<f64>>| -> Vec<f64> {
+                match c.filter(|c| c.len() == raw.len() && c.iter().all(|&w| w > 0.0)) {
+                    Some(c) => {
+                        let mean_w = c.iter().sum::<f64>() / c.len() as f64;
+                        c.iter().map(|w| mean_w / w).collect()
+                    }
+                    None => vec![1.0; raw.len()],
                 }
-                None => raw,
             };
+            let (fx, fy) = (factors(chart.x), factors(chart.y));
+            let steps: Vec<DVec2> = raw.iter().enumerate().map(|(k, s)| DVec2::new(s.x * fx[k], s.y * fy[k])).collect();
             let mean = steps.iter().copied().sum::<DVec2>() / steps.len() as f64;
             let worst_mm = steps.iter().map(|s| s.distance(mean)).fold(0.0, f64::max);
             let against = |v: f64, m: f64| m.abs() > STEP_SIGN_TOLERANCE_MM && v * m.signum() < -STEP_SIGN_TOLERANCE_MM;
-            let sign_changes = steps.iter().filter(|s| against(s.x, mean.x) || against(s.y, mean.y)).count();
+            let sign_changes = raw.iter().filter(|s| against(s.x, mean.x) || against(s.y, mean.y)).count();
             out.push(StepRegularity {
                 piece: piece.piece.clone(),
                 label: r.label.clone(),
@@ -257,19 +283,44 @@ pub fn step_regularity_by(
     out
 }
 
-/// [`step_regularity_by`] with each grade point read against the chart
-/// steps of its own governing girth ([`governing_girths`] of template `t`,
-/// the first that `chart_steps` gives), else those of `fallback` (the
-/// template's own girth: the bust for a bodice, the hip below the waist).
+/// [`step_regularity_by`] with each grade point read as a grader reads its
+/// rule, each axis against the chart steps of the measurement that governs
+/// it — the first of these that `chart_steps` gives with every step
+/// positive:
+/// * **x**, across the grain (a width): the point's own governing girths
+///   ([`governing_girths`] of template `t`: a waist point the waist, an
+///   armpit point the chest), then the template's [`principal_girths`];
+/// * **y**, along the grain (a length): the stature, then the template's
+///   [`principal_girths`] — on a chart that grades no length, a bodice
+///   lengthens over a fuller bust (its waist points' y follow the bust's
+///   steps, their x the waist's) and a skirt or trousers over a fuller hip.
 pub fn step_regularity_governed(
     table: &GradeRuleTable,
     t: &Template,
     chart_steps: impl Fn(MeasurementId) -> Option<Vec<f64>>,
-    fallback: MeasurementId,
 ) -> Vec<StepRegularity> {
-    step_regularity_by(table, |node| {
-        governing_girths(t, node).into_iter().find_map(&chart_steps).or_else(|| chart_steps(fallback))
+    let principal = principal_girths(t);
+    let first = |candidates: Vec<MeasurementId>| {
+        candidates.into_iter().find_map(|m| chart_steps(m).filter(|c| !c.is_empty() && c.iter().all(|&w| w > 0.0)))
+    };
+    let y = first([vec![MeasurementId::Stature], principal.clone()].concat());
+    step_regularity_by(table, |node| AxisSteps {
+        x: first([governing_girths(t, node), principal.clone()].concat()),
+        y: y.clone(),
     })
+}
+
+/// The girths that govern a garment as a whole, nearest first: the bust and
+/// the chest for a garment with a node on a bust point (a bodice), else the
+/// hip. A grader grades a piece's lengths by them where the chart grades no
+/// length, and reads a grade point by them where the chart lacks the
+/// point's own girth.
+pub fn principal_girths(t: &Template) -> Vec<MeasurementId> {
+    if t.nodes.iter().any(|n| MeasurementId::governing(n.point).contains(&MeasurementId::BustGirth)) {
+        vec![MeasurementId::BustGirth, MeasurementId::ChestGirth]
+    } else {
+        vec![MeasurementId::HipGirth]
+    }
 }
 
 /// The girths that govern how template node `node` grades, nearest first
@@ -277,8 +328,8 @@ pub fn step_regularity_governed(
 /// ([`crate::template::format::OnCurve`]) the girth along that curve, then
 /// those of the feature point it is tied to
 /// ([`MeasurementId::governing`]: a waist point the waist girth, an armpit
-/// point the chest girth). A reader falls back to the template's own
-/// governing girth where the chart gives none of them.
+/// point the chest girth). A reader falls back to the template's
+/// [`principal_girths`] where the chart gives none of them.
 pub fn governing_girths(t: &Template, node: u32) -> Vec<MeasurementId> {
     let mut out: Vec<MeasurementId> =
         t.on_curve.iter().filter(|c| c.node == node).filter_map(|c| MeasurementId::girth_along(c.curve)).collect();
@@ -420,11 +471,82 @@ mod tests {
         t.pieces[0].rules[1].deltas =
             vec![DVec2::ZERO, DVec2::new(20.0, 0.0), DVec2::new(60.0, 0.0), DVec2::new(80.0, 0.0)];
         let node = t.pieces[0].rules[1].node;
-        let own = step_regularity_by(&t, |n| Some(if n == node { vec![1.0, 2.0, 1.0] } else { vec![1.0; 3] }));
+        let own = step_regularity_by(&t, |n| {
+            AxisSteps::both(Some(if n == node { vec![1.0, 2.0, 1.0] } else { vec![1.0; 3] }))
+        });
         assert!(own[1].worst_mm < 1e-9 && own[1].sign_changes == 0, "{:?}", own[1]);
         assert_eq!(own[0].steps, step_regularity(&t, None)[0].steps);
         let one = &step_regularity(&t, Some(&[1.0, 1.0, 1.0]))[1];
         assert!(one.worst_mm > one.allowed_mm, "read against one even girth the point jumps: {one:?}");
+    }
+
+    /// One rule of one piece, steps `steps` from a base at the first size.
+    fn one_rule(node: u32, steps: &[DVec2]) -> GradeRuleTable {
+        let mut deltas = vec![DVec2::ZERO];
+        for s in steps {
+            deltas.push(*deltas.last().unwrap() + *s);
+        }
+        let sizes: Vec<String> = (0..deltas.len()).map(|k| format!("s{k}")).collect();
+        GradeRuleTable {
+            style: "t".into(),
+            base_size: sizes[0].clone(),
+            sizes,
+            pieces: vec![PieceGradeRules {
+                piece: "front".into(),
+                rules: vec![GradeRule { number: 1, node, label: "p".into(), deltas }],
+            }],
+        }
+    }
+
+    #[test]
+    fn each_axis_is_read_against_its_own_chart_steps() {
+        // x follows a girth stepping 1, 2, 1 (8 mm a unit), y one stepping 2, 1, 1 (−3 mm a unit)
+        let table = one_rule(0, &[DVec2::new(8.0, -6.0), DVec2::new(16.0, -3.0), DVec2::new(8.0, -3.0)]);
+        let (gx, gy) = (vec![1.0, 2.0, 1.0], vec![2.0, 1.0, 1.0]);
+        let per_axis = &step_regularity_by(&table, |_| AxisSteps { x: Some(gx.clone()), y: Some(gy.clone()) })[0];
+        assert!(per_axis.worst_mm < 1e-9 && per_axis.sign_changes == 0, "{per_axis:?}");
+        for one in [&gx, &gy] {
+            let r = &step_regularity(&table, Some(one))[0];
+            assert!(r.worst_mm > 2.0, "one girth for both axes leaves a jump: {r:?}");
+        }
+    }
+
+    #[test]
+    fn a_step_runs_back_by_what_the_ruler_shows_not_by_its_scaled_size() {
+        // x steps −2, −2, +0.4 mm as cut, the last over a chart step 0.4 of the others: scaled
+        // it is +0.8 mm against a mean of −0.8, but it moves 0.4 mm, under the ruler's 0.5
+        let chart = [1.0, 1.0, 0.4];
+        let small = one_rule(0, &[DVec2::new(-2.0, 0.0), DVec2::new(-2.0, 0.0), DVec2::new(0.4, 0.0)]);
+        let r = &step_regularity(&small, Some(&chart))[0];
+        assert!((r.steps[2].x - 0.8).abs() < 1e-9 && r.sign_changes == 0, "{r:?}");
+        let back = one_rule(0, &[DVec2::new(-2.0, 0.0), DVec2::new(-2.0, 0.0), DVec2::new(0.6, 0.0)]);
+        assert_eq!(step_regularity(&back, Some(&chart))[0].sign_changes, 1);
+    }
+
+    #[test]
+    fn a_bodice_waist_point_is_read_across_by_the_waist_and_along_by_the_bust() {
+        use crate::body::vocab::PointId;
+        let library = crate::template::library::builtin().expect("built-in templates");
+        let bodice = library.iter().find(|t| t.name == "fitted-bodice").expect("bodice");
+        let skirt = library.iter().find(|t| t.name == "straight-skirt").expect("skirt");
+        assert_eq!(principal_girths(bodice), [MeasurementId::BustGirth, MeasurementId::ChestGirth]);
+        assert_eq!(principal_girths(skirt), [MeasurementId::HipGirth]);
+        let node = bodice.nodes.iter().position(|n| n.point == PointId::WaistLeft).expect("waist node") as u32;
+        // x 10 mm per waist unit (steps 1, 2, 1), y −3 mm per bust unit (steps 2, 1, 1);
+        // the chart's stature does not grade (steps 0), so lengths go with the bust
+        let table = one_rule(node, &[DVec2::new(10.0, -6.0), DVec2::new(20.0, -3.0), DVec2::new(10.0, -3.0)]);
+        let chart = |m: MeasurementId| match m {
+            MeasurementId::WaistGirth => Some(vec![1.0, 2.0, 1.0]),
+            MeasurementId::BustGirth => Some(vec![2.0, 1.0, 1.0]),
+            MeasurementId::Stature => Some(vec![0.0; 3]),
+            _ => None,
+        };
+        let r = &step_regularity_governed(&table, bodice, chart)[0];
+        assert!(r.worst_mm < 1e-9 && r.sign_changes == 0, "{r:?}");
+        // a chart that grades the stature evenly reads the lengths by it: the y steps jump
+        let graded = |m: MeasurementId| if m == MeasurementId::Stature { Some(vec![1.0; 3]) } else { chart(m) };
+        let r = &step_regularity_governed(&table, bodice, graded)[0];
+        assert!((r.worst_mm - 2.0).abs() < 1e-9, "{r:?}");
     }
 
     #[test]
