@@ -6,7 +6,8 @@
 //! (`AUTO='{"candidates":8}'` overrides the found-dart search's options,
 //! `FLAT='{"hem_weight":0.5}'` the flattening's, `CLEAR='{"max_rounds":0}'` the
 //! surface clearing's;
-//! `[n]` after a piece is how many darts the search added).
+//! `[n]` after a piece is how many darts the search added; `FABRIC=1` adds each
+//! piece's thread strain, warp and weft p95, and the weave's shear p95).
 
 use std::path::Path;
 
@@ -59,6 +60,9 @@ fn main() {
             if let Ok(c) = std::env::var("CLEAR") {
                 go.clear = serde_json::from_str(&c).unwrap();
             }
+            if let Ok(k) = std::env::var("NEGOTIATION_POWER") {
+                go.pattern.negotiation_power = k.parse().unwrap();
+            }
             if let Ok(a) = std::env::var("AUTO") {
                 go.pattern.auto_darts = serde_json::from_str(&a).unwrap();
             }
@@ -87,6 +91,16 @@ fn main() {
                     d.strain_max * 100.0
                 );
                 line += &format!("[{}]", r.found_darts.len());
+                if std::env::var("FABRIC").is_ok() {
+                    let f = &r.fabric;
+                    line += &format!(
+                        " {{warp {:.2}% weft {:.2}% thread {:.2}% shear {:.1}°}}",
+                        f.warp_p95 * 100.0,
+                        f.weft_p95 * 100.0,
+                        f.thread_p95 * 100.0,
+                        f.shear_p95_deg
+                    );
+                }
                 if std::env::var("DARTS").is_ok() {
                     for fd in &r.found_darts {
                         line += &format!(

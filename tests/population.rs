@@ -21,8 +21,10 @@
 //! or cut line; the ease per declared girth within ±5 mm of the expected.
 //! Issue #14's bars on every grade: internal lines (dart legs, girth lines)
 //! simple and inside their piece; skirt and trouser pieces |E_s| ≤ 2 % and
-//! p95 edge strain ≤ 4 % (the trouser backs, still open, held to
-//! [`STRAIN_P95_OPEN`]); on the hm08 meshes (mirror-symmetric bodies) every
+//! p95 edge strain ≤ 4 % (the trouser backs, whose bar the garment's shape
+//! does not allow — the cloth follows the gluteal fold, a saddle, and the
+//! strain is along the warp, not the weave's shear; printed per template —
+//! held to [`STRAIN_P95_OPEN`]); on the hm08 meshes (mirror-symmetric bodies) every
 //! template mirror pair cut as one piece and mirror images within 0.5 %
 //! (area, width, height) and 0.5 mm (sew lines). A scan-like copy is not
 //! symmetric (its re-meshing and noise differ left and right): its pairs'
@@ -60,8 +62,9 @@ const EASE_TOLERANCE_MM: f64 = 5.0;
 const STRAIN_P95: f64 = 0.04;
 /// Issue #14's area bar for skirt and trouser pieces (|E_s|).
 const AREA_ACCURACY: f64 = 0.02;
-/// The pieces whose strain bar is still open (`tests/pattern.rs`: the seat's
-/// saddle, which no waist dart reaches) and the ceiling they are held to.
+/// The pieces whose strain bar is not met (`tests/pattern.rs`: the seat's
+/// saddle, which no waist dart reaches; `examples/seat_profile.rs`: the
+/// cloth 2.5 mm off the gluteal fold) and the ceiling they are held to.
 const STRAIN_OPEN: [&str; 2] = ["trousers left_back", "trousers right_back"];
 /// The ceiling of [`STRAIN_OPEN`] (p95 edge strain): a guard against
 /// regressions, not the bar. Measured 7.55 % at worst (pop39-scan's right
@@ -109,6 +112,8 @@ fn run(range: std::ops::Range<usize>) {
     let mut triangles: BTreeMap<String, usize> = BTreeMap::new();
     let mut ease_err: BTreeMap<(String, String), Worst> = BTreeMap::new();
     let mut p95: BTreeMap<String, Worst> = BTreeMap::new();
+    // thread strain of the pieces, per template: warp p95, weft p95, weave shear p95 (°)
+    let mut threads: BTreeMap<String, [Worst; 3]> = BTreeMap::new();
     let mut clear_ms = 0.0;
     let mut grades = 0usize;
     let mut failures: Vec<String> = Vec::new();
@@ -187,6 +192,10 @@ fn run(range: std::ops::Range<usize>) {
                     ));
                 }
                 p95.entry(key.clone()).or_default().see(r.distortion.strain_p95, || at(&r.name));
+                let th = threads.entry(key.clone()).or_default();
+                th[0].see(r.fabric.warp_p95, || at(&r.name));
+                th[1].see(r.fabric.weft_p95, || at(&r.name));
+                th[2].see(r.fabric.shear_p95_deg, || at(&r.name));
                 if t.name != "fitted-bodice" {
                     area.entry(key.clone()).or_default().see(d.area_accuracy.abs(), || at(&r.name));
                     if d.area_accuracy.abs() > AREA_ACCURACY {
@@ -260,6 +269,17 @@ fn run(range: std::ops::Range<usize>) {
     }
     for (t, w) in &p95 {
         eprintln!("{t}: worst piece p95 strain {:.2} % ({})", w.0 * 100.0, w.1);
+    }
+    for (t, [warp, weft, shear]) in &threads {
+        eprintln!(
+            "{t}: thread strain p95, worst piece: warp {:.2} % ({}), weft {:.2} % ({}); weave shear p95 {:.1}° ({})",
+            warp.0 * 100.0,
+            warp.1,
+            weft.0 * 100.0,
+            weft.1,
+            shear.0,
+            shear.1
+        );
     }
     for ((t, girth), w) in &ease_err {
         eprintln!("{t} {girth}: worst |ease − expected| {:.1} mm ({})", w.0, w.1);

@@ -57,6 +57,7 @@ use super::assemble::{
     PlacedPanel, SeamReport,
 };
 use super::darts::{dart_opening, insert_darts, AutoDartOptions, DartOrigin, FoundDart, Trial};
+use super::fabric::{fabric_strain, FabricStrain};
 use super::flatten::{distortion, flatten_with_sewn_lengths, Distortion, FlattenError, FlattenOptions, Flattening};
 use super::grade::{mirror_difference, MirrorDifference};
 use super::panels::{cut, Panel, PanelError, SeamChain};
@@ -224,6 +225,9 @@ pub struct PieceReport {
     pub size: String,
     /// Distortion of the flattening.
     pub distortion: Distortion,
+    /// Thread strain and weave shear of the piece as cut from woven cloth
+    /// (warp along the grain line; [`super::fabric`]).
+    pub fabric: FabricStrain,
     /// ARAP iterations done.
     pub iterations: usize,
     /// Whether ARAP met its tolerance.
@@ -722,6 +726,12 @@ fn pattern_once(
                 name: panel.name.clone(),
                 size: size.to_string(),
                 distortion: d,
+                fabric: fabric_strain(
+                    &panel.positions.iter().map(|q| *q * 1e3).collect::<Vec<_>>(),
+                    &panel.triangles,
+                    &p.uv_mm,
+                    DVec2::NEG_Y,
+                ),
                 iterations: flat.iterations,
                 converged: flat.converged,
                 fallback: flat.fallback,
