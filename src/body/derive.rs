@@ -51,7 +51,7 @@ use super::vocab::{self, CurveId, CurveRule, LoopChoice, Pick, PlaneRule, PointI
 use crate::geom::mesh::{MeshError, TriMesh};
 use crate::geom::plane::Plane;
 use crate::geom::polyline::Polyline;
-use crate::geom::query::{closest_point, disc_normal};
+use crate::geom::query::SphereIndex;
 use crate::geom::slice::slice;
 
 /// Distance of the aiming point of a [`Pick::Toward`] crossing, m: far
@@ -329,13 +329,15 @@ pub fn derive_features(
     if !missing.is_empty() {
         return Err(FeatureError::MissingLandmarks { missing });
     }
+    // one index for the landmarks' snapping and the frames' normals
+    let index = SphereIndex::new(&mesh);
     let mut snapped: BTreeMap<PointId, DVec3> = BTreeMap::new();
     let mut warnings = Vec::new();
     for (&id, &p) in &landmarks.points {
         if !p.is_finite() {
             return Err(FeatureError::NonFiniteLandmark { point: id });
         }
-        let sp = closest_point(&mesh, p);
+        let sp = index.closest_point(&mesh, p);
         let mm = sp.distance * MM_PER_M;
         if mm > opts.max_landmark_offset_mm {
             return Err(FeatureError::LandmarkOffSurface {
@@ -399,7 +401,7 @@ pub fn derive_features(
             |triple: f64| FeatureError::DegenerateFrame { point: def.id, triple, min: opts.min_frame_triple };
         let t1 = c1.tangent_at(cross.s_a, h).ok_or_else(|| degenerate(0.0))?;
         let t2 = c2.tangent_at(cross.s_b, h).ok_or_else(|| degenerate(0.0))?;
-        let n = disc_normal(&mesh, position, opts.normal_radius_mm / MM_PER_M).ok_or_else(|| degenerate(0.0))?;
+        let n = index.disc_normal(&mesh, position, opts.normal_radius_mm / MM_PER_M).ok_or_else(|| degenerate(0.0))?;
         let frame = Frame { t1, t2, n };
         let triple = frame.triple();
         if triple.is_nan() || triple.abs() < opts.min_frame_triple {

@@ -555,6 +555,8 @@ pub fn refit_rings(
     hung: &[u32],
 ) -> Result<usize, (u32, ProfileError)> {
     let mut refitted = 0;
+    // built on the first hung arc: its copy's points are tested against the body
+    let mut index: Option<crate::geom::query::SphereIndex> = None;
     for g in eased_girths(t, body, placed) {
         let (loop_, plane, radial) = (&g.loop_, &g.plane, g.radial);
         let total = loop_.length();
@@ -584,8 +586,9 @@ pub fn refit_rings(
             if hung_arc {
                 // only a copy that cuts into the body is bent (bending the others, hung knees,
                 // left crotch triangles through the body)
+                let index = index.get_or_insert_with(|| crate::geom::query::SphereIndex::new(&body.mesh));
                 let cuts_in = old.points().iter().any(|&q| {
-                    let c = crate::geom::query::closest_point(&body.mesh, q);
+                    let c = index.closest_point(&body.mesh, q);
                     (q - c.point).dot(body.mesh.face_area_vector(c.face)) < 0.0
                 });
                 if !cuts_in || old.points().len() != pts.len() {
