@@ -287,13 +287,13 @@ impl TriMesh {
     /// Scans often arrive with vertices split along UV or normal seams; the
     /// slicer needs them welded to chain sections across such seams.
     pub fn welded(&self, tolerance: f64) -> Result<Self, MeshError> {
-        use std::collections::HashMap;
         let cell = tolerance.max(f64::MIN_POSITIVE);
         let key = |p: DVec3| -> [i64; 3] {
             let q = (p / cell).floor();
             [q.x as i64, q.y as i64, q.z as i64]
         };
-        let mut grid: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
+        // only looked up, never iterated: the hasher cannot change the result
+        let mut grid: rustc_hash::FxHashMap<[i64; 3], Vec<u32>> = rustc_hash::FxHashMap::default();
         let mut remap = vec![0u32; self.positions.len()];
         let mut out: Vec<DVec3> = Vec::with_capacity(self.positions.len());
         for (i, &p) in self.positions.iter().enumerate() {

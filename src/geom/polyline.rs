@@ -349,31 +349,42 @@ impl Polyline {
                 (q0.min(q1), q0.max(q1))
             })
             .collect();
+        // …and of blocks of consecutive segments: a block whose box is out of reach holds no
+        // segment in reach (its box holds theirs), so skipping it changes nothing
+        let blocks: Vec<(DVec3, DVec3)> = boxes
+            .chunks(CROSSING_BLOCK)
+            .map(|c| c.iter().fold(c[0], |(lo, hi), (blo, bhi)| (lo.min(*blo), hi.max(*bhi))))
+            .collect();
+        let sep = |lo: DVec3, hi: DVec3, (blo, bhi): (DVec3, DVec3)| (blo - hi).max(lo - bhi).max(DVec3::ZERO).length();
         let mut min_gap = f64::INFINITY;
         let mut cands: Vec<Crossing> = Vec::new();
         for i in 0..self.segment_count() {
             let (p0, p1) = self.segment(i);
             let (lo, hi) = (p0.min(p1), p0.max(p1));
-            for (j, (blo, bhi)) in boxes.iter().enumerate() {
-                let sep = (*blo - hi).max(lo - *bhi).max(DVec3::ZERO).length();
-                if sep > min_gap + gap_tolerance {
+            for (k, &block) in blocks.iter().enumerate() {
+                if sep(lo, hi, block) > min_gap + gap_tolerance {
                     continue;
                 }
-                let (q0, q1) = other.segment(j);
-                let (s, t) = segment_segment(p0, p1, q0, q1);
-                let a = p0.lerp(p1, s);
-                let b = q0.lerp(q1, t);
-                let gap = a.distance(b);
-                if gap > min_gap + gap_tolerance {
-                    continue;
+                for j in k * CROSSING_BLOCK..((k + 1) * CROSSING_BLOCK).min(boxes.len()) {
+                    if sep(lo, hi, boxes[j]) > min_gap + gap_tolerance {
+                        continue;
+                    }
+                    let (q0, q1) = other.segment(j);
+                    let (s, t) = segment_segment(p0, p1, q0, q1);
+                    let a = p0.lerp(p1, s);
+                    let b = q0.lerp(q1, t);
+                    let gap = a.distance(b);
+                    if gap > min_gap + gap_tolerance {
+                        continue;
+                    }
+                    min_gap = min_gap.min(gap);
+                    cands.push(Crossing {
+                        s_a: ca[i] + s * (ca[i + 1] - ca[i]),
+                        s_b: cb[j] + t * (cb[j + 1] - cb[j]),
+                        point: 0.5 * (a + b),
+                        gap,
+                    });
                 }
-                min_gap = min_gap.min(gap);
-                cands.push(Crossing {
-                    s_a: ca[i] + s * (ca[i + 1] - ca[i]),
-                    s_b: cb[j] + t * (cb[j + 1] - cb[j]),
-                    point: 0.5 * (a + b),
-                    gap,
-                });
             }
         }
         cands
@@ -382,6 +393,9 @@ impl Polyline {
             .min_by(|x, y| x.point.distance(near).total_cmp(&y.point.distance(near)))
     }
 }
+
+/// Segments of the other curve per block in [`Polyline::crossing`] (count).
+const CROSSING_BLOCK: usize = 16;
 
 /// Whether segments `pq` and `rs` cross at a point interior to both (strict
 /// orientation signs: touching or collinear overlap is not a crossing).
@@ -522,6 +536,57 @@ mod tests {
         assert!((c.length() - exact).abs() < 1e-12);
         let plane = Plane::from_point_normal(DVec3::ZERO, DVec3::Y).unwrap();
         assert!((tape_length(&[&c], &plane) - exact).abs() < 1e-9);
+    }
+
+    #[test]
+    fn crossing_by_blocks_matches_every_pair() {
+        // two wiggly closed curves around the same axis (a girth and a path that cross it)
+        let ring = Polyline::new(
+            (0..300)
+                .map(|i| {
+                    let a = i as f64 / 300.0 * 2.0 * PI;
+                    DVec3::new(a.cos(), 0.05 * (7.0 * a).sin(), a.sin())
+                })
+                .collect(),
+            true,
+        );
+        let path = Polyline::new(
+            (0..=250)
+                .map(|i| {
+                    let t = i as f64 / 250.0 * 2.0 - 1.0;
+                    DVec3::new(0.3 * (3.0 * t).sin(), t, 1.0 + 0.02 * (11.0 * t).cos())
+                })
+                .collect(),
+            false,
+        );
+        for near in [DVec3::new(0.0, 0.0, 1.0), DVec3::new(0.5, -1.0, 0.5), DVec3::new(-2.0, 3.0, 0.0)] {
+            for tol in [0.0, 1e-3, 0.05] {
+                let fast = ring.crossing(&path, near, tol).expect("crossing");
+                // every pair of segments, the pairs within tol of the least gap, the one nearest `near`
+                let (ca, cb) = (ring.cumulative(), path.cumulative());
+                let mut all = Vec::new();
+                for i in 0..ring.segment_count() {
+                    for j in 0..path.segment_count() {
+                        let ((p0, p1), (q0, q1)) = (ring.segment(i), path.segment(j));
+                        let (s, t) = segment_segment(p0, p1, q0, q1);
+                        let (a, b) = (p0.lerp(p1, s), q0.lerp(q1, t));
+                        all.push(Crossing {
+                            s_a: ca[i] + s * (ca[i + 1] - ca[i]),
+                            s_b: cb[j] + t * (cb[j + 1] - cb[j]),
+                            point: 0.5 * (a + b),
+                            gap: a.distance(b),
+                        });
+                    }
+                }
+                let min = all.iter().map(|c| c.gap).fold(f64::INFINITY, f64::min);
+                let brute = all
+                    .into_iter()
+                    .filter(|c| c.gap <= min + tol)
+                    .min_by(|x, y| x.point.distance(near).total_cmp(&y.point.distance(near)))
+                    .expect("pairs");
+                assert_eq!(fast, brute, "near {near}, tolerance {tol}");
+            }
+        }
     }
 
     #[test]
