@@ -19,7 +19,8 @@
 //!   several bodies the base body's dart plan is carried to the others.
 //!
 //! Determinism: every artefact is a function of the inputs only — the base
-//! size first, then the others in request order; the artefacts and the report
+//! size first, then the others (side by side on rayon's global pool, each
+//! from the base size's body and plans alone); the artefacts and the report
 //! list sizes and templates in request order, and the report carries no wall
 //! times (those go to [`Outcome::timings`], outside the artefacts).
 
@@ -580,30 +581,28 @@ pub fn size_chart(
     let fit_opts = FitOptions::for_sex(chart.sex);
     // the base size first: its dart plan is carried to every other size (one plan per run)
     let base_row = chart.rows.iter().position(|r| r.size == base).unwrap_or(0);
-    let order = base_first(total, base_row);
     let mut done_rows: Vec<Option<Done>> = vec![None; total];
-    let mut plans: Option<Vec<DartPlan>> = None;
-    // the base size fitted, every other size graded from its body (one body growing with the chart)
-    let mut base_fit: Option<FittedMannequin> = None;
-    for (done, i) in order.enumerate() {
+    // one size: fitted (the base size) or graded from the base size's body, then every
+    // template graded on it with the base size's dart plans
+    let counter = std::sync::atomic::AtomicUsize::new(0);
+    let one_size = |i: usize,
+                    base_fit: Option<&FittedMannequin>,
+                    plans: Option<&[DartPlan]>,
+                    timer: &mut Timer|
+     -> Result<(FittedMannequin, Done), WorkError> {
         let row = &chart.rows[i];
+        let done = counter.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         progress(stage::FIT, done, total);
         let start = Instant::now();
-        let fitted = match &base_fit {
+        let fitted = match base_fit {
             Some(b) if !fit_opts.independent_sizes => fit_graded(model, b, row, &fit_opts),
             _ => fit_size(model, row, &fit_opts),
         }
         .map_err(|source| WorkError::Fit { size: row.size.clone(), source })?;
-        if base_fit.is_none() {
-            base_fit = Some(fitted.clone());
-        }
         timer.add(stage::FIT, start);
         progress(stage::REFINE, done, total);
         let mut out = Vec::new();
-        let graded = grade_body(ctx, templates, &fitted.body, &row.size, true, plans.as_deref(), &mut timer, &mut out)?;
-        if plans.is_none() {
-            plans = Some(plans_of(&graded));
-        }
+        let graded = grade_body(ctx, templates, &fitted.body, &row.size, true, plans, timer, &mut out)?;
         let residuals: BTreeMap<&str, serde_json::Value> = fitted
             .residuals
             .iter()
@@ -615,7 +614,36 @@ pub fn size_chart(
             })
             .collect();
         let mannequin = serde_json::json!({"residuals": residuals, "warnings": fitted.body.warnings});
-        done_rows[i] = Some((graded, mannequin, out));
+        Ok((fitted, (graded, mannequin, out)))
+    };
+    // the base size first: its body is the one every other size grows from, its dart plan
+    // the run's (one plan per run)
+    let mut order = base_first(total, base_row).filter(|&i| i < total);
+    if let Some(first) = order.next() {
+        let (base_fit, base_done) = one_size(first, None, None, &mut timer)?;
+        let plans = plans_of(&base_done.0);
+        done_rows[first] = Some(base_done);
+        // the other sizes side by side on the process's one worker pool (rayon's global pool:
+        // as many threads as CPUs, shared by every request), each with its own stage timer
+        let rest: Vec<usize> = order.collect();
+        let others: Vec<Result<(Done, Timer), WorkError>> = {
+            use rayon::prelude::*;
+            rest.par_iter()
+                .map(|&i| {
+                    let mut timer = Timer(BTreeMap::new());
+                    let (_, done) = one_size(i, Some(&base_fit), Some(&plans), &mut timer)?;
+                    Ok((done, timer))
+                })
+                .collect()
+        };
+        // the first failure in the sequential order, as one size after another would report it
+        for (&i, result) in rest.iter().zip(others) {
+            let (done, t) = result?;
+            for (stage, ms) in t.0 {
+                timer.add_ms(&stage, ms);
+            }
+            done_rows[i] = Some(done);
+        }
     }
     // reported in the chart's order
     let mut rows = Vec::with_capacity(total);
