@@ -282,6 +282,45 @@ fn base_first(total: usize, base: usize) -> impl Iterator<Item = usize> {
     std::iter::once(base).chain((0..total).filter(move |&i| i != base))
 }
 
+/// A run's bodies in two steps: `first` on the base index `base` (its result
+/// `B` — the base body, the run's dart plans — is what every other body is
+/// made from), then `rest` on every other index of `0..total` side by side
+/// on rayon's global pool (one process-wide budget of CPU threads, shared by
+/// every request), each with its own stage timer, summed into `timer`.
+/// Results by index; the first failure in the sequential order (the base,
+/// then the others in index order) is the one returned, as one body after
+/// another would report it.
+fn base_then_rest<B: Sync, T: Send>(
+    total: usize,
+    base: usize,
+    timer: &mut Timer,
+    first: impl FnOnce(usize, &mut Timer) -> Result<(B, T), WorkError>,
+    rest: impl Fn(usize, &B, &mut Timer) -> Result<T, WorkError> + Sync,
+) -> Result<Vec<Option<T>>, WorkError> {
+    use rayon::prelude::*;
+    let mut done: Vec<Option<T>> = (0..total).map(|_| None).collect();
+    let mut order = base_first(total, base).filter(|&i| i < total);
+    let Some(b) = order.next() else { return Ok(done) };
+    let (made, t) = first(b, timer)?;
+    done[b] = Some(t);
+    let others: Vec<usize> = order.collect();
+    let results: Vec<Result<(T, Timer), WorkError>> = others
+        .par_iter()
+        .map(|&i| {
+            let mut own = Timer(BTreeMap::new());
+            rest(i, &made, &mut own).map(|t| (t, own))
+        })
+        .collect();
+    for (&i, result) in others.iter().zip(results) {
+        let (t, own) = result?;
+        for (stage, ms) in own.0 {
+            timer.add_ms(&stage, ms);
+        }
+        done[i] = Some(t);
+    }
+    Ok(done)
+}
+
 /// The dart plan of each template's grade, in template order (a run's base size).
 fn plans_of(graded: &[(String, Graded, serde_json::Value)]) -> Vec<DartPlan> {
     graded.iter().map(|(_, g, _)| g.pattern.dart_plan.clone()).collect()
@@ -581,7 +620,6 @@ pub fn size_chart(
     let fit_opts = FitOptions::for_sex(chart.sex);
     // the base size first: its dart plan is carried to every other size (one plan per run)
     let base_row = chart.rows.iter().position(|r| r.size == base).unwrap_or(0);
-    let mut done_rows: Vec<Option<Done>> = vec![None; total];
     // one size: fitted (the base size) or graded from the base size's body, then every
     // template graded on it with the base size's dart plans
     let counter = std::sync::atomic::AtomicUsize::new(0);
@@ -617,34 +655,18 @@ pub fn size_chart(
         Ok((fitted, (graded, mannequin, out)))
     };
     // the base size first: its body is the one every other size grows from, its dart plan
-    // the run's (one plan per run)
-    let mut order = base_first(total, base_row).filter(|&i| i < total);
-    if let Some(first) = order.next() {
-        let (base_fit, base_done) = one_size(first, None, None, &mut timer)?;
-        let plans = plans_of(&base_done.0);
-        done_rows[first] = Some(base_done);
-        // the other sizes side by side on the process's one worker pool (rayon's global pool:
-        // as many threads as CPUs, shared by every request), each with its own stage timer
-        let rest: Vec<usize> = order.collect();
-        let others: Vec<Result<(Done, Timer), WorkError>> = {
-            use rayon::prelude::*;
-            rest.par_iter()
-                .map(|&i| {
-                    let mut timer = Timer(BTreeMap::new());
-                    let (_, done) = one_size(i, Some(&base_fit), Some(&plans), &mut timer)?;
-                    Ok((done, timer))
-                })
-                .collect()
-        };
-        // the first failure in the sequential order, as one size after another would report it
-        for (&i, result) in rest.iter().zip(others) {
-            let (done, t) = result?;
-            for (stage, ms) in t.0 {
-                timer.add_ms(&stage, ms);
-            }
-            done_rows[i] = Some(done);
-        }
-    }
+    // the run's (one plan per run); the others side by side
+    let done_rows = base_then_rest(
+        total,
+        base_row,
+        &mut timer,
+        |i, timer| {
+            let (fitted, done) = one_size(i, None, None, timer)?;
+            let plans = plans_of(&done.0);
+            Ok(((fitted, plans), done))
+        },
+        |i, (base_fit, plans), timer| one_size(i, Some(base_fit), Some(plans), timer).map(|(_, done)| done),
+    )?;
     // reported in the chart's order
     let mut rows = Vec::with_capacity(total);
     let mut mannequins = Vec::with_capacity(total);
@@ -698,29 +720,35 @@ pub fn bodies(
     let mut per_template: Vec<Vec<(String, Vec<PatternPiece>)>> = vec![Vec::new(); templates.len()];
     let mut reports = Vec::new();
     let total = inputs.len();
-    // the base body first (several bodies: a run): its dart plan is carried to the others
     let base_at = base.and_then(|b| inputs.iter().position(|i| i.name == b)).unwrap_or(0);
-    let order = base_first(total, base_at);
-    let mut done_bodies: Vec<Option<Done>> = vec![None; total];
-    let mut plans: Option<Vec<DartPlan>> = None;
-    for (done, i) in order.enumerate() {
+    let counter = std::sync::atomic::AtomicUsize::new(0);
+    let one_body = |i: usize, plans: Option<&[DartPlan]>, timer: &mut Timer| -> Result<Done, WorkError> {
         let input = &inputs[i];
+        let done = counter.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         progress(stage::BODY, done, total);
         let start = Instant::now();
         let body = read_body(input, &ctx.opts)?;
         timer.add(stage::BODY, start);
         progress(stage::REFINE, done, total);
         let mut out = Vec::new();
-        let graded = grade_body(ctx, templates, &body, input.name, false, plans.as_deref(), &mut timer, &mut out)?;
-        if plans.is_none() {
-            plans = Some(plans_of(&graded));
-        }
+        let graded = grade_body(ctx, templates, &body, input.name, false, plans, timer, &mut out)?;
         let measurements: BTreeMap<&str, f64> =
             measure(&body, &MeasureOptions::default()).iter().map(|(id, v)| (id.as_str(), *v)).collect();
         // what derivation accepted but a person should look at (issue #13: warnings, not refusals)
         let about = serde_json::json!({"measurements_m": measurements, "warnings": body.warnings});
-        done_bodies[i] = Some((graded, about, out));
-    }
+        Ok((graded, about, out))
+    };
+    // the base body first (several bodies: a run): its dart plan is carried to the others
+    let done_bodies = base_then_rest(
+        total,
+        base_at,
+        &mut timer,
+        |i, timer| {
+            let done = one_body(i, None, timer)?;
+            Ok((plans_of(&done.0), done))
+        },
+        |i, plans, timer| one_body(i, Some(plans), timer),
+    )?;
     for (input, done) in inputs.iter().zip(done_bodies) {
         let Some((graded, about, out)) = done else { continue };
         artefacts.extend(out);
