@@ -163,54 +163,52 @@ impl SphereIndex {
         Self { faces, blocks }
     }
 
-    /// [`closest_point`] of `mesh` (the mesh this index was built for) to `p`.
-    pub fn closest_point(&self, mesh: &TriMesh, p: DVec3) -> SurfacePoint {
-        let mut best = SurfacePoint { face: FaceId(0), point: DVec3::ZERO, distance: f64::INFINITY };
+    /// Visits, in face order, every face whose bounding sphere comes within
+    /// `reach` of `p`; `visit` returns the reach from then on (a closest-point
+    /// search narrows it). A block is skipped only where each of its faces
+    /// would be.
+    fn visit_within(&self, p: DVec3, mut reach: f64, mut visit: impl FnMut(FaceId) -> f64) {
         for (k, &(bc, br)) in self.blocks.iter().enumerate() {
-            if bc.distance(p) - br > best.distance {
+            if bc.distance(p) - br > reach {
                 continue;
             }
             let start = k * SPHERE_BLOCK;
-            for (i, &(centre, rad)) in
-                self.faces[start..(start + SPHERE_BLOCK).min(self.faces.len())].iter().enumerate()
-            {
-                if centre.distance(p) - rad > best.distance {
+            let end = (start + SPHERE_BLOCK).min(self.faces.len());
+            for (f, &(centre, rad)) in self.faces[start..end].iter().enumerate() {
+                if centre.distance(p) - rad > reach {
                     continue;
                 }
-                let face = FaceId((start + i) as u32);
-                let [a, b, c] = mesh.corners(face);
-                let q = closest_on_triangle(p, a, b, c);
-                let d = q.distance(p);
-                if d < best.distance {
-                    best = SurfacePoint { face, point: q, distance: d };
-                }
+                reach = visit(FaceId((start + f) as u32));
             }
         }
+    }
+
+    /// [`closest_point`] of `mesh` (the mesh this index was built for) to `p`.
+    pub fn closest_point(&self, mesh: &TriMesh, p: DVec3) -> SurfacePoint {
+        let mut best = SurfacePoint { face: FaceId(0), point: DVec3::ZERO, distance: f64::INFINITY };
+        self.visit_within(p, f64::INFINITY, |face| {
+            let [a, b, c] = mesh.corners(face);
+            let q = closest_on_triangle(p, a, b, c);
+            let d = q.distance(p);
+            if d < best.distance {
+                best = SurfacePoint { face, point: q, distance: d };
+            }
+            best.distance
+        });
         best
     }
 
     /// [`disc_normal`] of `mesh` (the mesh this index was built for) at `p`.
     pub fn disc_normal(&self, mesh: &TriMesh, p: DVec3, radius: f64) -> Option<DVec3> {
         let mut sum = DVec3::ZERO;
-        for (k, &(bc, br)) in self.blocks.iter().enumerate() {
-            if bc.distance(p) - br > radius {
-                continue;
+        self.visit_within(p, radius, |face| {
+            let [a, b, c] = mesh.corners(face);
+            let d = closest_on_triangle(p, a, b, c).distance(p);
+            if d <= radius {
+                sum += mesh.face_area_vector(face) * (1.0 - (d / radius).powi(2));
             }
-            let start = k * SPHERE_BLOCK;
-            for (i, &(centre, rad)) in
-                self.faces[start..(start + SPHERE_BLOCK).min(self.faces.len())].iter().enumerate()
-            {
-                if centre.distance(p) - rad > radius {
-                    continue;
-                }
-                let face = FaceId((start + i) as u32);
-                let [a, b, c] = mesh.corners(face);
-                let d = closest_on_triangle(p, a, b, c).distance(p);
-                if d <= radius {
-                    sum += mesh.face_area_vector(face) * (1.0 - (d / radius).powi(2));
-                }
-            }
-        }
+            radius
+        });
         sum.try_normalize().or_else(|| mesh.face_area_vector(self.closest_point(mesh, p).face).try_normalize())
     }
 }

@@ -65,12 +65,11 @@ pub fn fabric_strain(positions: &[DVec3], triangles: &[[u32; 3]], uv: &[DVec2], 
     let weft = g.perp();
     let mut rows: Vec<Row> = Vec::with_capacity(triangles.len());
     for t in triangles {
-        let (Some(p), Some(q)) = (
-            t.iter().map(|&i| positions.get(i as usize).copied()).collect::<Option<Vec<DVec3>>>(),
-            t.iter().map(|&i| uv.get(i as usize).copied()).collect::<Option<Vec<DVec2>>>(),
-        ) else {
+        let idx = t.map(|i| i as usize);
+        if idx.iter().any(|&i| i >= positions.len() || i >= uv.len()) {
             continue;
-        };
+        }
+        let (p, q) = (idx.map(|i| positions[i]), idx.map(|i| uv[i]));
         let (a, b) = (p[1] - p[0], p[2] - p[0]);
         let n = a.cross(b);
         let area = 0.5 * n.length();

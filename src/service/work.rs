@@ -286,29 +286,32 @@ fn base_first(total: usize, base: usize) -> impl Iterator<Item = usize> {
 /// `B` — the base body, the run's dart plans — is what every other body is
 /// made from), then `rest` on every other index of `0..total` side by side
 /// on rayon's global pool (one process-wide budget of CPU threads, shared by
-/// every request), each with its own stage timer, summed into `timer`.
-/// Results by index; the first failure in the sequential order (the base,
-/// then the others in index order) is the one returned, as one body after
-/// another would report it.
+/// every request), each with its own stage timer, summed into `timer`. Each
+/// call gets `(index, how many bodies were started before it)`, the latter
+/// for progress. Results by index; the first failure in the sequential
+/// order (the base, then the others in index order) is the one returned, as
+/// one body after another would report it.
 fn base_then_rest<B: Sync, T: Send>(
     total: usize,
     base: usize,
     timer: &mut Timer,
     first: impl FnOnce(usize, &mut Timer) -> Result<(B, T), WorkError>,
-    rest: impl Fn(usize, &B, &mut Timer) -> Result<T, WorkError> + Sync,
+    rest: impl Fn((usize, usize), &B, &mut Timer) -> Result<T, WorkError> + Sync,
 ) -> Result<Vec<Option<T>>, WorkError> {
     use rayon::prelude::*;
+    use std::sync::atomic::{AtomicUsize, Ordering};
     let mut done: Vec<Option<T>> = (0..total).map(|_| None).collect();
     let mut order = base_first(total, base).filter(|&i| i < total);
     let Some(b) = order.next() else { return Ok(done) };
     let (made, t) = first(b, timer)?;
     done[b] = Some(t);
     let others: Vec<usize> = order.collect();
+    let started = AtomicUsize::new(1);
     let results: Vec<Result<(T, Timer), WorkError>> = others
         .par_iter()
         .map(|&i| {
             let mut own = Timer(BTreeMap::new());
-            rest(i, &made, &mut own).map(|t| (t, own))
+            rest((i, started.fetch_add(1, Ordering::Relaxed)), &made, &mut own).map(|t| (t, own))
         })
         .collect();
     for (&i, result) in others.iter().zip(results) {
@@ -620,16 +623,14 @@ pub fn size_chart(
     let fit_opts = FitOptions::for_sex(chart.sex);
     // the base size first: its dart plan is carried to every other size (one plan per run)
     let base_row = chart.rows.iter().position(|r| r.size == base).unwrap_or(0);
-    // one size: fitted (the base size) or graded from the base size's body, then every
-    // template graded on it with the base size's dart plans
-    let counter = std::sync::atomic::AtomicUsize::new(0);
-    let one_size = |i: usize,
+    // one size (`done` sizes started before it): fitted (the base size) or graded from the
+    // base size's body, then every template graded on it with the base size's dart plans
+    let one_size = |(i, done): (usize, usize),
                     base_fit: Option<&FittedMannequin>,
                     plans: Option<&[DartPlan]>,
                     timer: &mut Timer|
      -> Result<(FittedMannequin, Done), WorkError> {
         let row = &chart.rows[i];
-        let done = counter.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         progress(stage::FIT, done, total);
         let start = Instant::now();
         let fitted = match base_fit {
@@ -661,11 +662,11 @@ pub fn size_chart(
         base_row,
         &mut timer,
         |i, timer| {
-            let (fitted, done) = one_size(i, None, None, timer)?;
+            let (fitted, done) = one_size((i, 0), None, None, timer)?;
             let plans = plans_of(&done.0);
             Ok(((fitted, plans), done))
         },
-        |i, (base_fit, plans), timer| one_size(i, Some(base_fit), Some(plans), timer).map(|(_, done)| done),
+        |at, (base_fit, plans), timer| one_size(at, Some(base_fit), Some(plans), timer).map(|(_, done)| done),
     )?;
     // reported in the chart's order
     let mut rows = Vec::with_capacity(total);
@@ -721,33 +722,33 @@ pub fn bodies(
     let mut reports = Vec::new();
     let total = inputs.len();
     let base_at = base.and_then(|b| inputs.iter().position(|i| i.name == b)).unwrap_or(0);
-    let counter = std::sync::atomic::AtomicUsize::new(0);
-    let one_body = |i: usize, plans: Option<&[DartPlan]>, timer: &mut Timer| -> Result<Done, WorkError> {
-        let input = &inputs[i];
-        let done = counter.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        progress(stage::BODY, done, total);
-        let start = Instant::now();
-        let body = read_body(input, &ctx.opts)?;
-        timer.add(stage::BODY, start);
-        progress(stage::REFINE, done, total);
-        let mut out = Vec::new();
-        let graded = grade_body(ctx, templates, &body, input.name, false, plans, timer, &mut out)?;
-        let measurements: BTreeMap<&str, f64> =
-            measure(&body, &MeasureOptions::default()).iter().map(|(id, v)| (id.as_str(), *v)).collect();
-        // what derivation accepted but a person should look at (issue #13: warnings, not refusals)
-        let about = serde_json::json!({"measurements_m": measurements, "warnings": body.warnings});
-        Ok((graded, about, out))
-    };
+    // one body (`done` bodies started before it)
+    let one_body =
+        |(i, done): (usize, usize), plans: Option<&[DartPlan]>, timer: &mut Timer| -> Result<Done, WorkError> {
+            let input = &inputs[i];
+            progress(stage::BODY, done, total);
+            let start = Instant::now();
+            let body = read_body(input, &ctx.opts)?;
+            timer.add(stage::BODY, start);
+            progress(stage::REFINE, done, total);
+            let mut out = Vec::new();
+            let graded = grade_body(ctx, templates, &body, input.name, false, plans, timer, &mut out)?;
+            let measurements: BTreeMap<&str, f64> =
+                measure(&body, &MeasureOptions::default()).iter().map(|(id, v)| (id.as_str(), *v)).collect();
+            // what derivation accepted but a person should look at (issue #13: warnings, not refusals)
+            let about = serde_json::json!({"measurements_m": measurements, "warnings": body.warnings});
+            Ok((graded, about, out))
+        };
     // the base body first (several bodies: a run): its dart plan is carried to the others
     let done_bodies = base_then_rest(
         total,
         base_at,
         &mut timer,
         |i, timer| {
-            let done = one_body(i, None, timer)?;
+            let done = one_body((i, 0), None, timer)?;
             Ok((plans_of(&done.0), done))
         },
-        |i, plans, timer| one_body(i, Some(plans), timer),
+        |at, plans, timer| one_body(at, Some(plans), timer),
     )?;
     for (input, done) in inputs.iter().zip(done_bodies) {
         let Some((graded, about, out)) = done else { continue };
