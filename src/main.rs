@@ -101,6 +101,11 @@ struct GradeArgs {
     /// service's `created` gives the same bytes for the same stamp.
     #[arg(long)]
     created: Option<String>,
+    /// Also print the wall time per stage, summed over the grades, as one
+    /// JSON object on stderr (`timings_ms {...}`), as the service reports
+    /// them in `timings_ms`; benches/chart.sh reads it.
+    #[arg(long)]
+    timings: bool,
 }
 
 /// Bad input to a command: exit code 2.
@@ -396,6 +401,9 @@ fn grade_offline(args: &GradeArgs) -> Result<(), Box<dyn std::error::Error>> {
         std::fs::write(&path, &a.bytes).map_err(|e| format!("{}: {e}", path.display()))?;
     }
     println!("wrote {} artefacts to {}", outcome.artefacts.len(), args.out.display());
+    if args.timings {
+        eprintln!("timings_ms {}", serde_json::to_string(&outcome.timings)?);
+    }
     Ok(())
 }
 

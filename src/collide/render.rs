@@ -212,6 +212,13 @@ impl GpuContext {
     }
 
     /// The depth maps of `mesh` for the configured views.
+    ///
+    /// Every pass of every view is recorded into one command buffer and
+    /// submitted once: the three render targets (depth buffer, packed
+    /// depth, normals) are shared by the passes, each pass's targets copied
+    /// to its own read-back buffers before the next pass clears them, and
+    /// the device is waited on once for all read-backs (issue #15: one
+    /// submission and one wait per body instead of one per pass).
     pub fn render(&self, mesh: &TriMesh, opts: &RenderOptions) -> Result<Vec<DepthMap>, RenderError> {
         let n = opts.resolution;
         if !(16..=self.max_dimension).contains(&n) {
@@ -227,22 +234,6 @@ impl GpuContext {
             usage: wgpu::BufferUsages::INDEX,
         });
         let body = Body { mesh, normals: &normals, indices: &ibuf, index_count: indices.len() as u32 };
-        views.iter().map(|v| self.render_view(&body, v, n)).collect()
-    }
-
-    fn render_view(&self, body: &Body<'_>, view: &View, n: u32) -> Result<DepthMap, RenderError> {
-        let (mesh, normals) = (body.mesh, body.normals);
-        let vertices: Vec<Vertex> = mesh
-            .positions()
-            .iter()
-            .zip(normals)
-            .map(|(p, nn)| Vertex { clip: view.clip(*p), normal: nn.as_vec3().to_array() })
-            .collect();
-        let vbuf = self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("grade3d body vertices"),
-            contents: bytemuck::cast_slice(&vertices),
-            usage: wgpu::BufferUsages::VERTEX,
-        });
         let extent = wgpu::Extent3d { width: n, height: n, depth_or_array_layers: 1 };
         let texture = |label: &str, format: wgpu::TextureFormat, usage: wgpu::TextureUsages| {
             self.device.create_texture(&wgpu::TextureDescriptor {
@@ -257,18 +248,71 @@ impl GpuContext {
             })
         };
         let color_usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
+        let targets = Targets {
+            depth: texture("grade3d depth buffer", DEPTH, wgpu::TextureUsages::RENDER_ATTACHMENT),
+            packed: texture("grade3d packed depth", COLOR, color_usage),
+            normal: texture("grade3d normals", COLOR, color_usage),
+        };
         let padded_row = (4 * n).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
-        let mut results = Vec::new();
-        for (pass, pipeline, clear_depth) in [("nearest", &self.nearest, 1.0f32), ("farthest", &self.farthest, 0.0)] {
-            let depth_tex =
-                texture(&format!("grade3d {pass} depth buffer"), DEPTH, wgpu::TextureUsages::RENDER_ATTACHMENT);
-            let packed = texture(&format!("grade3d {pass} packed depth"), COLOR, color_usage);
-            let normal = texture(&format!("grade3d {pass} normals"), COLOR, color_usage);
-            let views = [&packed, &normal].map(|t| t.create_view(&Default::default()));
-            let depth_view = depth_tex.create_view(&Default::default());
-            let mut enc = self
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("grade3d depth-map encoder") });
+        let mut enc = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("grade3d depth-map encoder") });
+        // per view, per pass (nearest, farthest): the packed-depth and normal read-backs
+        let readbacks: Vec<[[wgpu::Buffer; 2]; 2]> =
+            views.iter().map(|v| self.encode_view(&mut enc, &body, &targets, v, n, padded_row)).collect();
+        self.queue.submit([enc.finish()]);
+        let (tx, rx) = mpsc::channel();
+        for buf in readbacks.iter().flatten().flatten() {
+            let tx = tx.clone();
+            buf.slice(..).map_async(wgpu::MapMode::Read, move |r| {
+                let _ = tx.send(r);
+            });
+        }
+        self.device
+            .poll(wgpu::PollType::Wait { submission_index: None, timeout: None })
+            .map_err(|e| RenderError::Readback(e.to_string()))?;
+        let mapped: Vec<_> = rx.try_iter().collect();
+        if mapped.len() != 4 * readbacks.len() {
+            return Err(RenderError::Readback(format!(
+                "{} of {} read-back buffers mapped after the wait",
+                mapped.len(),
+                4 * readbacks.len()
+            )));
+        }
+        for r in mapped {
+            r.map_err(|e| RenderError::Readback(e.to_string()))?;
+        }
+        views.iter().zip(&readbacks).map(|(v, bufs)| decode(v, bufs, n, padded_row)).collect()
+    }
+
+    /// Records the nearest and farthest passes of one view into `enc`, each
+    /// followed by the copies of its two colour targets into new read-back
+    /// buffers (returned per pass: packed depth, normals).
+    fn encode_view(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        body: &Body<'_>,
+        targets: &Targets,
+        view: &View,
+        n: u32,
+        padded_row: u32,
+    ) -> [[wgpu::Buffer; 2]; 2] {
+        let vertices: Vec<Vertex> = body
+            .mesh
+            .positions()
+            .iter()
+            .zip(body.normals)
+            .map(|(p, nn)| Vertex { clip: view.clip(*p), normal: nn.as_vec3().to_array() })
+            .collect();
+        let vbuf = self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("grade3d body vertices"),
+            contents: bytemuck::cast_slice(&vertices),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let extent = wgpu::Extent3d { width: n, height: n, depth_or_array_layers: 1 };
+        let colour_views = [&targets.packed, &targets.normal].map(|t| t.create_view(&Default::default()));
+        let depth_view = targets.depth.create_view(&Default::default());
+        [("nearest", &self.nearest, 1.0f32), ("farthest", &self.farthest, 0.0)].map(|(pass, pipeline, clear_depth)| {
             {
                 let attach = |v| {
                     Some(wgpu::RenderPassColorAttachment {
@@ -282,8 +326,8 @@ impl GpuContext {
                     })
                 };
                 let mut rp = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("grade3d depth-map pass"),
-                    color_attachments: &[attach(&views[0]), attach(&views[1])],
+                    label: Some(&format!("grade3d {pass} depth-map pass")),
+                    color_attachments: &[attach(&colour_views[0]), attach(&colour_views[1])],
                     depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                         view: &depth_view,
                         depth_ops: Some(wgpu::Operations {
@@ -299,8 +343,7 @@ impl GpuContext {
                 rp.set_index_buffer(body.indices.slice(..), wgpu::IndexFormat::Uint32);
                 rp.draw_indexed(0..body.index_count, 0, 0..1);
             }
-            let mut bufs = Vec::new();
-            for (t, what) in [(&packed, "depth"), (&normal, "normal")] {
+            [(&targets.packed, "depth"), (&targets.normal, "normal")].map(|(t, what)| {
                 let buf = self.device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some(&format!("grade3d {pass} {what} read-back")),
                     size: u64::from(padded_row) * u64::from(n),
@@ -319,73 +362,55 @@ impl GpuContext {
                     },
                     extent,
                 );
-                bufs.push(buf);
-            }
-            self.queue.submit([enc.finish()]);
-            let mut out = Vec::new();
-            for buf in &bufs {
-                out.push(self.read(buf, n, padded_row)?);
-            }
-            results.push(out);
-        }
-        let px = (n * n) as usize;
-        let mut map = DepthMap {
-            view: *view,
-            width: n,
-            height: n,
-            front: vec![f32::NAN; px],
-            back: vec![f32::NAN; px],
-            front_normal: vec![[0.0; 3]; px],
-            back_normal: vec![[0.0; 3]; px],
-        };
-        for (k, pass) in results.iter().enumerate() {
-            let (depth, normal) = (&pass[0], &pass[1]);
-            for i in 0..px {
-                let c = &depth[4 * i..4 * i + 4];
+                buf
+            })
+        })
+    }
+}
+
+/// The render targets every pass of one body shares.
+struct Targets {
+    depth: wgpu::Texture,
+    packed: wgpu::Texture,
+    normal: wgpu::Texture,
+}
+
+/// The depth map of `view` from its mapped read-backs (per pass: packed
+/// depth, normals; rows `padded_row` bytes apart), unmapping them.
+fn decode(view: &View, bufs: &[[wgpu::Buffer; 2]; 2], n: u32, padded_row: u32) -> Result<DepthMap, RenderError> {
+    let px = (n * n) as usize;
+    let (row, stride) = ((4 * n) as usize, padded_row as usize);
+    let dec = |b: u8| f32::from(b) / 255.0 * 2.0 - 1.0;
+    // one pass: the world depth and the normal of every pixel, row by row without the padding
+    let pass = |[depth, normal]: &[wgpu::Buffer; 2]| -> Result<(Vec<f32>, Vec<[f32; 3]>), RenderError> {
+        let read = |b: &wgpu::Buffer| b.slice(..).get_mapped_range().map_err(|e| RenderError::Readback(e.to_string()));
+        let (d, nm) = (read(depth)?, read(normal)?);
+        // empty pixels keep NaN and a zero normal (the zeroed allocation)
+        let mut world = vec![f32::NAN; px];
+        let mut normals = vec![[0.0f32; 3]; px];
+        let width = n as usize;
+        for y in 0..width {
+            let (drow, nrow) = (&d[y * stride..y * stride + row], &nm[y * stride..y * stride + row]);
+            let (wout, nout) = (&mut world[y * width..(y + 1) * width], &mut normals[y * width..(y + 1) * width]);
+            for x in 0..width {
+                let c = &drow[4 * x..4 * x + 4];
                 if c[3] == 0 {
                     continue;
                 }
                 let code = (u32::from(c[0]) << 16) | (u32::from(c[1]) << 8) | u32::from(c[2]);
-                let world = view.depth_to_world(f64::from(code) / DEPTH_CODES) as f32;
-                let nn = &normal[4 * i..4 * i + 3];
-                let dec = |b: u8| f32::from(b) / 255.0 * 2.0 - 1.0;
-                let nv = [dec(nn[0]), dec(nn[1]), dec(nn[2])];
-                if k == 0 {
-                    map.front[i] = world;
-                    map.front_normal[i] = nv;
-                } else {
-                    map.back[i] = world;
-                    map.back_normal[i] = nv;
-                }
+                wout[x] = view.depth_to_world(f64::from(code) / DEPTH_CODES) as f32;
+                let nn = &nrow[4 * x..4 * x + 3];
+                nout[x] = [dec(nn[0]), dec(nn[1]), dec(nn[2])];
             }
         }
-        Ok(map)
-    }
-
-    /// Maps a read-back buffer and strips the row padding.
-    fn read(&self, buf: &wgpu::Buffer, n: u32, padded_row: u32) -> Result<Vec<u8>, RenderError> {
-        let slice = buf.slice(..);
-        let (tx, rx) = mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            let _ = tx.send(r);
-        });
-        self.device
-            .poll(wgpu::PollType::Wait { submission_index: None, timeout: None })
-            .map_err(|e| RenderError::Readback(e.to_string()))?;
-        rx.recv()
-            .map_err(|e| RenderError::Readback(e.to_string()))?
-            .map_err(|e| RenderError::Readback(e.to_string()))?;
-        let data = slice.get_mapped_range().map_err(|e| RenderError::Readback(e.to_string()))?;
-        let row = (4 * n) as usize;
-        let mut out = Vec::with_capacity(row * n as usize);
-        for y in 0..n as usize {
-            let start = y * padded_row as usize;
-            out.extend_from_slice(&data[start..start + row]);
-        }
-        drop(data);
-        buf.unmap();
-        Ok(out)
-    }
+        drop((d, nm));
+        depth.unmap();
+        normal.unmap();
+        Ok((world, normals))
+    };
+    let (front, front_normal) = pass(&bufs[0])?;
+    let (back, back_normal) = pass(&bufs[1])?;
+    Ok(DepthMap { view: *view, width: n, height: n, front, back, front_normal, back_normal })
 }
 
 /// Distance a depth code step represents along a view, m (for tolerances).
