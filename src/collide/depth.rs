@@ -102,10 +102,13 @@ pub struct DepthMap {
     pub front: Vec<f32>,
     /// Farthest surface along `d`; NaN where empty.
     pub back: Vec<f32>,
-    /// Outward unit normal of the nearest surface per pixel.
-    pub front_normal: Vec<[f32; 3]>,
-    /// Outward unit normal of the farthest surface.
-    pub back_normal: Vec<[f32; 3]>,
+    /// Outward unit normal of the nearest surface per pixel, as rendered:
+    /// each component `n·½ + ½` in unorm8 ([`encode_normal`],
+    /// [`decode_normal`]); 3 bytes a pixel instead of 12 (issue #15: a
+    /// body's maps at 1024² take 28 MB, not 64).
+    pub front_normal: Vec<[u8; 3]>,
+    /// Outward unit normal of the farthest surface, as `front_normal`.
+    pub back_normal: Vec<[u8; 3]>,
 }
 
 /// What the inside test found for a point in one view.
@@ -155,9 +158,21 @@ impl DepthMap {
         let to_back = z - (b - margin);
         let (escape, n) =
             if to_front <= to_back { (to_front, self.front_normal[i]) } else { (to_back, self.back_normal[i]) };
-        let n = DVec3::new(f64::from(n[0]), f64::from(n[1]), f64::from(n[2]));
-        Probe { inside: true, escape, normal: n.normalize_or_zero() }
+        Probe { inside: true, escape, normal: decode_normal(n).normalize_or_zero() }
     }
+}
+
+/// A normal component in `[−1, 1]` as the renderer stores it: `n·½ + ½` in
+/// unorm8, `round(255 (n·½ + ½))`.
+pub fn encode_normal(n: [f32; 3]) -> [u8; 3] {
+    n.map(|c| ((c.clamp(-1.0, 1.0) * 0.5 + 0.5) * 255.0).round() as u8)
+}
+
+/// The normal of [`encode_normal`]'s bytes, `b / 255 · 2 − 1` per
+/// component (not normalised).
+pub fn decode_normal(b: [u8; 3]) -> DVec3 {
+    let c = |b: u8| f64::from(f32::from(b) / 255.0 * 2.0 - 1.0);
+    DVec3::new(c(b[0]), c(b[1]), c(b[2]))
 }
 
 /// Eq. (13) over several views: inside iff inside in every view. Returns
@@ -193,8 +208,8 @@ mod tests {
             height: n,
             front: vec![f32::NAN; (n * n) as usize],
             back: vec![f32::NAN; (n * n) as usize],
-            front_normal: vec![[0.0; 3]; (n * n) as usize],
-            back_normal: vec![[0.0; 3]; (n * n) as usize],
+            front_normal: vec![[0; 3]; (n * n) as usize],
+            back_normal: vec![[0; 3]; (n * n) as usize],
         };
         for y in 0..n {
             for x in 0..n {
@@ -208,8 +223,8 @@ mod tests {
                     m.back[i] = -h as f32;
                     let pf = view.u * a + view.w * b + view.d * h;
                     let pb = view.u * a + view.w * b - view.d * h;
-                    m.front_normal[i] = (pf / r).as_vec3().to_array();
-                    m.back_normal[i] = (pb / r).as_vec3().to_array();
+                    m.front_normal[i] = encode_normal((pf / r).as_vec3().to_array());
+                    m.back_normal[i] = encode_normal((pb / r).as_vec3().to_array());
                 }
             }
         }

@@ -380,14 +380,13 @@ struct Targets {
 fn decode(view: &View, bufs: &[[wgpu::Buffer; 2]; 2], n: u32, padded_row: u32) -> Result<DepthMap, RenderError> {
     let px = (n * n) as usize;
     let (row, stride) = ((4 * n) as usize, padded_row as usize);
-    let dec = |b: u8| f32::from(b) / 255.0 * 2.0 - 1.0;
     // one pass: the world depth and the normal of every pixel, row by row without the padding
-    let pass = |[depth, normal]: &[wgpu::Buffer; 2]| -> Result<(Vec<f32>, Vec<[f32; 3]>), RenderError> {
+    let pass = |[depth, normal]: &[wgpu::Buffer; 2]| -> Result<(Vec<f32>, Vec<[u8; 3]>), RenderError> {
         let read = |b: &wgpu::Buffer| b.slice(..).get_mapped_range().map_err(|e| RenderError::Readback(e.to_string()));
         let (d, nm) = (read(depth)?, read(normal)?);
         // empty pixels keep NaN and a zero normal (the zeroed allocation)
         let mut world = vec![f32::NAN; px];
-        let mut normals = vec![[0.0f32; 3]; px];
+        let mut normals = vec![[0u8; 3]; px];
         let width = n as usize;
         for y in 0..width {
             let (drow, nrow) = (&d[y * stride..y * stride + row], &nm[y * stride..y * stride + row]);
@@ -399,8 +398,7 @@ fn decode(view: &View, bufs: &[[wgpu::Buffer; 2]; 2], n: u32, padded_row: u32) -
                 }
                 let code = (u32::from(c[0]) << 16) | (u32::from(c[1]) << 8) | u32::from(c[2]);
                 wout[x] = view.depth_to_world(f64::from(code) / DEPTH_CODES) as f32;
-                let nn = &nrow[4 * x..4 * x + 3];
-                nout[x] = [dec(nn[0]), dec(nn[1]), dec(nn[2])];
+                nout[x] = [nrow[4 * x], nrow[4 * x + 1], nrow[4 * x + 2]];
             }
         }
         drop((d, nm));

@@ -546,7 +546,7 @@ impl ScaleSolver {
         let d = if m.iter().all(|v| v.is_finite() && *v > 0.0) {
             self.observe(&s, &m);
             for (i, row) in self.jac.iter_mut().enumerate() {
-                if !(row[i] > 0.0) {
+                if row[i].is_nan() || row[i] <= 0.0 {
                     row[i] = m[i] / s[i];
                 }
             }
