@@ -15,7 +15,7 @@
 //! threshold) are written.
 
 use glam::DVec3;
-use grade3d::collide::depth::{DepthMap, View};
+use grade3d::collide::depth::{decode_depth, DepthMap, View};
 use grade3d::collide::render::{GpuContext, RenderOptions};
 use grade3d::geom::mesh::{FaceId, TriMesh};
 
@@ -173,7 +173,10 @@ fn check_body_maps(gpu: &GpuContext) {
     assert_eq!(maps.len(), 2);
     for (k, m) in maps.iter().enumerate() {
         let (front, back) = rasterise(&mesh, &m.view, n);
-        for (which, g, c) in [("front", &m.front, &front), ("back", &m.back, &back)] {
+        let world = |px: &[[u8; 4]]| -> Vec<f32> {
+            px.iter().map(|&p| decode_depth(&m.view, p).map_or(f32::NAN, |w| w as f32)).collect()
+        };
+        for (which, g, c) in [("front", &world(&m.front), &front), ("back", &world(&m.back), &back)] {
             let name = format!("{:?}-view{k}-{which}", info.backend);
             let cmp = compare(&name, n, g, c, &m.view);
             eprintln!(

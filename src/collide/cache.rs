@@ -61,8 +61,8 @@ pub struct Obstacle {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(default)]
 pub struct ObstacleCacheOptions {
-    /// Bodies kept (count); about 30 MB each at 1024² (two views, front and
-    /// back: 28 MB of maps, and the winding tree). Default 16.
+    /// Bodies kept (count); about 35 MB each at 1024² (two views, front and
+    /// back, as rendered: 32 MB of maps, and the winding tree). Default 16.
     pub capacity: usize,
 }
 

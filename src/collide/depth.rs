@@ -98,17 +98,43 @@ pub struct DepthMap {
     pub width: u32,
     /// Image height, pixels.
     pub height: u32,
-    /// Nearest surface along `d` per pixel (world coordinate `p·d`, m); NaN where empty.
-    pub front: Vec<f32>,
-    /// Farthest surface along `d`; NaN where empty.
-    pub back: Vec<f32>,
+    /// Nearest surface along `d` per pixel, as rendered (RGBA8): the depth
+    /// code in RGB (24 bits, R most significant; [`encode_depth`],
+    /// [`DepthMap::front_depth`]), A 255 where the body covers the pixel
+    /// and 0 where it is empty. Kept as rendered, so that reading a body's
+    /// maps back is a copy (issue #15).
+    pub front: Vec<[u8; 4]>,
+    /// Farthest surface along `d`, as `front`.
+    pub back: Vec<[u8; 4]>,
     /// Outward unit normal of the nearest surface per pixel, as rendered:
-    /// each component `n·½ + ½` in unorm8 ([`encode_normal`],
-    /// [`decode_normal`]); 3 bytes a pixel instead of 12 (issue #15: a
-    /// body's maps at 1024² take 28 MB, not 64).
-    pub front_normal: Vec<[u8; 3]>,
+    /// each component `n·½ + ½` in unorm8 in RGB ([`encode_normal`],
+    /// [`decode_normal`]), A unused.
+    pub front_normal: Vec<[u8; 4]>,
     /// Outward unit normal of the farthest surface, as `front_normal`.
-    pub back_normal: Vec<[u8; 3]>,
+    pub back_normal: Vec<[u8; 4]>,
+}
+
+/// Largest depth code: depth `z ∈ [0, 1]` is stored as `round(z (2²⁴ − 1))`.
+pub const DEPTH_CODES: f64 = 16_777_215.0;
+
+/// A pixel of [`DepthMap::front`] or [`DepthMap::back`] for the surface at
+/// `p·d = world` (m) in `view`: `z = (d_max − world) / (d_max − d_min)`,
+/// code `round(z (2²⁴ − 1))`, covered.
+pub fn encode_depth(view: &View, world: f64) -> [u8; 4] {
+    let z = ((view.d_range[1] - world) / (view.d_range[1] - view.d_range[0])).clamp(0.0, 1.0);
+    let code = (z * DEPTH_CODES).round() as u32;
+    [(code >> 16) as u8, (code >> 8) as u8, code as u8, 255]
+}
+
+/// The world coordinate `p·d` (m) of a depth pixel, `None` where empty:
+/// `d_max − (code / (2²⁴ − 1)) (d_max − d_min)`, in single precision (the
+/// code's 24 bits fit its mantissa).
+pub fn decode_depth(view: &View, px: [u8; 4]) -> Option<f64> {
+    if px[3] == 0 {
+        return None;
+    }
+    let code = (u32::from(px[0]) << 16) | (u32::from(px[1]) << 8) | u32::from(px[2]);
+    Some(f64::from(view.depth_to_world(f64::from(code) / DEPTH_CODES) as f32))
 }
 
 /// What the inside test found for a point in one view.
@@ -123,6 +149,17 @@ pub struct Probe {
 }
 
 impl DepthMap {
+    /// The nearest surface at pixel `i` (world `p·d`, m); `None` where empty
+    /// or outside the image.
+    pub fn front_depth(&self, i: usize) -> Option<f64> {
+        decode_depth(&self.view, *self.front.get(i)?)
+    }
+
+    /// The farthest surface at pixel `i`, as [`Self::front_depth`].
+    pub fn back_depth(&self, i: usize) -> Option<f64> {
+        decode_depth(&self.view, *self.back.get(i)?)
+    }
+
     /// The pixel of a point, row 0 at the top of the image; `None` outside the image.
     pub fn pixel(&self, p: DVec3) -> Option<usize> {
         let v = &self.view;
@@ -146,10 +183,7 @@ impl DepthMap {
     pub fn probe_with_margin(&self, p: DVec3, margin: f64) -> Probe {
         let outside = Probe { inside: false, escape: 0.0, normal: DVec3::ZERO };
         let Some(i) = self.pixel(p) else { return outside };
-        let (f, b) = (f64::from(self.front[i]), f64::from(self.back[i]));
-        if !f.is_finite() || !b.is_finite() {
-            return outside;
-        }
+        let (Some(f), Some(b)) = (self.front_depth(i), self.back_depth(i)) else { return outside };
         let z = p.dot(self.view.d);
         if z < b - margin || z > f + margin {
             return outside;
@@ -162,15 +196,16 @@ impl DepthMap {
     }
 }
 
-/// A normal component in `[−1, 1]` as the renderer stores it: `n·½ + ½` in
-/// unorm8, `round(255 (n·½ + ½))`.
-pub fn encode_normal(n: [f32; 3]) -> [u8; 3] {
-    n.map(|c| ((c.clamp(-1.0, 1.0) * 0.5 + 0.5) * 255.0).round() as u8)
+/// A normal as the renderer stores it: each component `n·½ + ½` in unorm8,
+/// `round(255 (n·½ + ½))`, in RGB.
+pub fn encode_normal(n: [f32; 3]) -> [u8; 4] {
+    let c = n.map(|c| ((c.clamp(-1.0, 1.0) * 0.5 + 0.5) * 255.0).round() as u8);
+    [c[0], c[1], c[2], 255]
 }
 
 /// The normal of [`encode_normal`]'s bytes, `b / 255 · 2 − 1` per
 /// component (not normalised).
-pub fn decode_normal(b: [u8; 3]) -> DVec3 {
+pub fn decode_normal(b: [u8; 4]) -> DVec3 {
     let c = |b: u8| f64::from(f32::from(b) / 255.0 * 2.0 - 1.0);
     DVec3::new(c(b[0]), c(b[1]), c(b[2]))
 }
@@ -206,10 +241,10 @@ mod tests {
             view,
             width: n,
             height: n,
-            front: vec![f32::NAN; (n * n) as usize],
-            back: vec![f32::NAN; (n * n) as usize],
-            front_normal: vec![[0; 3]; (n * n) as usize],
-            back_normal: vec![[0; 3]; (n * n) as usize],
+            front: vec![[0; 4]; (n * n) as usize],
+            back: vec![[0; 4]; (n * n) as usize],
+            front_normal: vec![[0; 4]; (n * n) as usize],
+            back_normal: vec![[0; 4]; (n * n) as usize],
         };
         for y in 0..n {
             for x in 0..n {
@@ -219,8 +254,8 @@ mod tests {
                 if h2 >= 0.0 {
                     let i = (y * n + x) as usize;
                     let h = h2.sqrt();
-                    m.front[i] = h as f32;
-                    m.back[i] = -h as f32;
+                    m.front[i] = encode_depth(&view, h);
+                    m.back[i] = encode_depth(&view, -h);
                     let pf = view.u * a + view.w * b + view.d * h;
                     let pb = view.u * a + view.w * b - view.d * h;
                     m.front_normal[i] = encode_normal((pf / r).as_vec3().to_array());
@@ -229,6 +264,24 @@ mod tests {
             }
         }
         m
+    }
+
+    #[test]
+    fn depth_and_normal_pixels_round_trip() {
+        let view = View::set(ViewSet::FrontBack, DVec3::splat(-1.0), DVec3::splat(1.0), 0.0)[0];
+        let step = (view.d_range[1] - view.d_range[0]) / DEPTH_CODES;
+        for world in [-1.0, -0.3141, 0.0, 0.5, 1.0] {
+            let back = decode_depth(&view, encode_depth(&view, world)).unwrap();
+            assert!((back - world).abs() <= step, "{world} -> {back}");
+        }
+        // the ends of the range are codes 0 and 2^24 - 1
+        assert_eq!(encode_depth(&view, 1.0), [0, 0, 0, 255]);
+        assert_eq!(encode_depth(&view, -1.0), [255, 255, 255, 255]);
+        // an empty pixel has no depth, whatever its code
+        assert_eq!(decode_depth(&view, [12, 34, 56, 0]), None);
+        let n = decode_normal(encode_normal([0.0, -1.0, 1.0]));
+        // half a unorm8 step of n·½ + ½, in n
+        assert!((n - DVec3::new(0.0, -1.0, 1.0)).abs().max_element() <= 1.0 / 255.0 + 1e-6, "{n}");
     }
 
     #[test]

@@ -22,7 +22,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::DVec3;
 use wgpu::util::DeviceExt;
 
-use super::depth::{DepthMap, View, ViewSet};
+use super::depth::{DepthMap, View, ViewSet, DEPTH_CODES};
 use crate::geom::mesh::TriMesh;
 
 /// Knobs of the renderer.
@@ -114,8 +114,6 @@ fn fs(i: VOut) -> FOut {
 
 const COLOR: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
-/// Largest 24-bit depth code.
-const DEPTH_CODES: f64 = 16_777_215.0;
 
 /// The process-wide GPU context.
 #[derive(Debug)]
@@ -376,39 +374,30 @@ struct Targets {
 }
 
 /// The depth map of `view` from its mapped read-backs (per pass: packed
-/// depth, normals; rows `padded_row` bytes apart), unmapping them.
+/// depth, normals; rows `padded_row` bytes apart): the rows copied as
+/// rendered, without the padding, and the buffers unmapped.
 fn decode(view: &View, bufs: &[[wgpu::Buffer; 2]; 2], n: u32, padded_row: u32) -> Result<DepthMap, RenderError> {
-    let px = (n * n) as usize;
     let (row, stride) = ((4 * n) as usize, padded_row as usize);
-    // one pass: the world depth and the normal of every pixel, row by row without the padding
-    let pass = |[depth, normal]: &[wgpu::Buffer; 2]| -> Result<(Vec<f32>, Vec<[u8; 3]>), RenderError> {
-        let read = |b: &wgpu::Buffer| b.slice(..).get_mapped_range().map_err(|e| RenderError::Readback(e.to_string()));
-        let (d, nm) = (read(depth)?, read(normal)?);
-        // empty pixels keep NaN and a zero normal (the zeroed allocation)
-        let mut world = vec![f32::NAN; px];
-        let mut normals = vec![[0u8; 3]; px];
-        let width = n as usize;
-        for y in 0..width {
-            let (drow, nrow) = (&d[y * stride..y * stride + row], &nm[y * stride..y * stride + row]);
-            let (wout, nout) = (&mut world[y * width..(y + 1) * width], &mut normals[y * width..(y + 1) * width]);
-            for x in 0..width {
-                let c = &drow[4 * x..4 * x + 4];
-                if c[3] == 0 {
-                    continue;
-                }
-                let code = (u32::from(c[0]) << 16) | (u32::from(c[1]) << 8) | u32::from(c[2]);
-                wout[x] = view.depth_to_world(f64::from(code) / DEPTH_CODES) as f32;
-                nout[x] = [nrow[4 * x], nrow[4 * x + 1], nrow[4 * x + 2]];
-            }
+    let copy = |buf: &wgpu::Buffer| -> Result<Vec<[u8; 4]>, RenderError> {
+        let data = buf.slice(..).get_mapped_range().map_err(|e| RenderError::Readback(e.to_string()))?;
+        let mut out: Vec<[u8; 4]> = Vec::with_capacity((n * n) as usize);
+        for y in 0..n as usize {
+            out.extend_from_slice(bytemuck::cast_slice(&data[y * stride..y * stride + row]));
         }
-        drop((d, nm));
-        depth.unmap();
-        normal.unmap();
-        Ok((world, normals))
+        drop(data);
+        buf.unmap();
+        Ok(out)
     };
-    let (front, front_normal) = pass(&bufs[0])?;
-    let (back, back_normal) = pass(&bufs[1])?;
-    Ok(DepthMap { view: *view, width: n, height: n, front, back, front_normal, back_normal })
+    let [[front, front_normal], [back, back_normal]] = bufs;
+    Ok(DepthMap {
+        view: *view,
+        width: n,
+        height: n,
+        front: copy(front)?,
+        back: copy(back)?,
+        front_normal: copy(front_normal)?,
+        back_normal: copy(back_normal)?,
+    })
 }
 
 /// Distance a depth code step represents along a view, m (for tolerances).
@@ -418,11 +407,7 @@ pub fn depth_resolution(view: &View) -> f64 {
 
 /// The world position of a point on the nearest surface of a pixel (for tests and images).
 pub fn pixel_point(map: &DepthMap, x: u32, y: u32) -> Option<DVec3> {
-    let i = (y * map.width + x) as usize;
-    let f = f64::from(*map.front.get(i)?);
-    if !f.is_finite() {
-        return None;
-    }
+    let f = map.front_depth((y * map.width + x) as usize)?;
     let v = &map.view;
     let a = v.u_range[0] + (f64::from(x) + 0.5) / f64::from(map.width) * (v.u_range[1] - v.u_range[0]);
     let b = v.w_range[1] - (f64::from(y) + 0.5) / f64::from(map.height) * (v.w_range[1] - v.w_range[0]);
