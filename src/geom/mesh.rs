@@ -6,8 +6,6 @@
 //! every computation here weights by area, so they contribute nothing.
 //! Units are whatever the caller uses; the body layer works in metres.
 
-use std::collections::BTreeMap;
-
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
@@ -337,24 +335,48 @@ impl TriMesh {
 /// Boundary loops of a triangle list (vertex ids), each run along its
 /// faces' orientation: chains of half-edges with no opposite half-edge.
 pub fn boundary_loops(triangles: &[[u32; 3]]) -> Vec<Vec<u32>> {
-    let mut directed: BTreeMap<(u32, u32), usize> = BTreeMap::new();
-    for t in triangles {
-        for k in 0..3 {
-            *directed.entry((t[k], t[(k + 1) % 3])).or_default() += 1;
-        }
-    }
-    // boundary half-edges: no opposite half-edge
-    let mut next: BTreeMap<u32, Vec<u32>> = BTreeMap::new();
-    for &(a, b) in directed.keys() {
-        if !directed.contains_key(&(b, a)) {
-            next.entry(a).or_default().push(b);
+    // every directed half-edge once, sorted
+    let mut half: Vec<(u32, u32)> =
+        triangles.iter().flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3]))).collect();
+    half.sort_unstable();
+    half.dedup();
+    // boundary half-edges (no opposite half-edge), sorted by tail then head
+    let boundary: Vec<(u32, u32)> =
+        half.iter().copied().filter(|&(a, b)| half.binary_search(&(b, a)).is_err()).collect();
+    // per tail vertex, ascending: its range of boundary half-edges; a walk takes the
+    // highest head left first (the range's end moves down)
+    let mut tails: Vec<u32> = Vec::new();
+    let mut range: Vec<[usize; 2]> = Vec::new();
+    for (i, &(a, _)) in boundary.iter().enumerate() {
+        match tails.last() {
+            Some(&last) if last == a => {
+                if let Some(r) = range.last_mut() {
+                    r[1] = i + 1;
+                }
+            }
+            _ => {
+                tails.push(a);
+                range.push([i, i + 1]);
+            }
         }
     }
     let mut loops = Vec::new();
-    while let Some((&start, _)) = next.iter().find(|(_, v)| !v.is_empty()) {
+    // the lowest tail with half-edges left starts the next loop; a tail's list only shrinks
+    let mut cursor = 0;
+    loop {
+        while cursor < tails.len() && range[cursor][0] == range[cursor][1] {
+            cursor += 1;
+        }
+        let Some(&start) = tails.get(cursor) else { break };
         let mut lp = vec![start];
         let mut at = start;
-        while let Some(to) = next.get_mut(&at).and_then(|v| v.pop()) {
+        while let Ok(g) = tails.binary_search(&at) {
+            let [lo, hi] = range[g];
+            if lo == hi {
+                break;
+            }
+            range[g][1] = hi - 1;
+            let to = boundary[hi - 1].1;
             if to == start {
                 break;
             }
@@ -369,6 +391,83 @@ pub fn boundary_loops(triangles: &[[u32; 3]]) -> Vec<Vec<u32>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+    use std::collections::BTreeMap;
+
+    /// The ordered-map walk `boundary_loops` replaced (issue #15), kept as
+    /// the reference it must agree with loop for loop.
+    fn boundary_loops_reference(triangles: &[[u32; 3]]) -> Vec<Vec<u32>> {
+        let mut directed: BTreeMap<(u32, u32), usize> = BTreeMap::new();
+        for t in triangles {
+            for k in 0..3 {
+                *directed.entry((t[k], t[(k + 1) % 3])).or_default() += 1;
+            }
+        }
+        let mut next: BTreeMap<u32, Vec<u32>> = BTreeMap::new();
+        for &(a, b) in directed.keys() {
+            if !directed.contains_key(&(b, a)) {
+                next.entry(a).or_default().push(b);
+            }
+        }
+        let mut loops = Vec::new();
+        while let Some((&start, _)) = next.iter().find(|(_, v)| !v.is_empty()) {
+            let mut lp = vec![start];
+            let mut at = start;
+            while let Some(to) = next.get_mut(&at).and_then(|v| v.pop()) {
+                if to == start {
+                    break;
+                }
+                lp.push(to);
+                at = to;
+            }
+            loops.push(lp);
+        }
+        loops
+    }
+
+    /// The two triangles of each kept cell of a `w × h` grid of quads.
+    fn grid_cells(w: u32, keep: &[bool]) -> Vec<[u32; 3]> {
+        let v = |x: u32, y: u32| y * (w + 1) + x;
+        keep.iter()
+            .enumerate()
+            .filter(|(_, &k)| k)
+            .flat_map(|(c, _)| {
+                let (x, y) = (c as u32 % w, c as u32 / w);
+                [[v(x, y), v(x + 1, y), v(x + 1, y + 1)], [v(x, y), v(x + 1, y + 1), v(x, y + 1)]]
+            })
+            .collect()
+    }
+
+    #[test]
+    fn boundary_loops_of_a_grid_with_a_hole_and_a_bowtie() {
+        // 3 x 3 grid without its centre: an outer loop of 12 and a hole of 4
+        let ring = grid_cells(3, &[true, true, true, true, false, true, true, true, true]);
+        let loops = boundary_loops(&ring);
+        assert_eq!(loops.iter().map(Vec::len).collect::<Vec<_>>(), vec![12, 4]);
+        assert_eq!(loops, boundary_loops_reference(&ring));
+        // two cells touching at one vertex (non-manifold): the walk still agrees
+        let bowtie = grid_cells(2, &[true, false, false, true]);
+        assert_eq!(boundary_loops(&bowtie), boundary_loops_reference(&bowtie));
+        assert!(boundary_loops(&[]).is_empty());
+    }
+
+    proptest! {
+        /// Any subset of a grid's cells, any orientation of each triangle:
+        /// the same loops as the reference, in the same order.
+        #[test]
+        fn boundary_loops_match_the_ordered_map_walk(
+            keep in prop::collection::vec(any::<bool>(), 36),
+            flip in prop::collection::vec(any::<bool>(), 72),
+        ) {
+            let mut tris = grid_cells(6, &keep);
+            for (t, &f) in tris.iter_mut().zip(&flip) {
+                if f {
+                    t.swap(1, 2);
+                }
+            }
+            prop_assert_eq!(boundary_loops(&tris), boundary_loops_reference(&tris));
+        }
+    }
 
     fn tet() -> TriMesh {
         TriMesh::from_raw(

@@ -71,9 +71,11 @@ pub struct AutoDartOptions {
     pub min_gain: f64,
     /// Shortest dart, along its legs, mm. Default 20.
     pub min_length_mm: f64,
-    /// Threads that flatten a round's candidates side by side (count; 1: on
-    /// the caller's thread). Default: the machine's available parallelism.
-    pub threads: usize,
+    /// Flatten a round's candidates side by side on rayon's global pool
+    /// (the process's one thread budget; issue #15 replaced a scoped thread
+    /// per CPU inside each pool worker); false: one after another on the
+    /// caller's thread. The result is the same either way. Default true.
+    pub parallel: bool,
 }
 
 impl Default for AutoDartOptions {
@@ -85,7 +87,7 @@ impl Default for AutoDartOptions {
             candidates: 24,
             min_gain: 0.0005,
             min_length_mm: 20.0,
-            threads: std::thread::available_parallelism().map_or(1, usize::from),
+            parallel: true,
         }
     }
 }
@@ -182,7 +184,7 @@ pub fn vertex_strain(positions: &[DVec3], triangles: &[[u32; 3]], uv: &[DVec2]) 
 /// (module docs). Vertices whose fine id is below `n_nodes` are template
 /// nodes (never cut through, never a mouth); `min_intake` is the least
 /// opening a dart must have, in metres; `flatten` flattens a candidate panel
-/// (called from several threads at once when [`AutoDartOptions::threads`] > 1).
+/// (called from several threads at once under [`AutoDartOptions::parallel`]).
 pub fn insert_darts(
     panel: &Panel,
     first: Trial,
@@ -208,17 +210,11 @@ pub fn insert_darts(
             let intake = acceptable(&trial_panel, &trial, min_intake)?;
             Some((trial_panel, trial, intake))
         };
-        // candidates are independent: flattened on up to `threads` scoped threads
-        let threads = opts.threads.max(1).min(paths.len().max(1));
-        let results: Vec<Option<(Panel, Trial, f64)>> = if threads > 1 {
-            let chunk = paths.len().div_ceil(threads);
-            std::thread::scope(|scope| {
-                let handles: Vec<_> = paths
-                    .chunks(chunk)
-                    .map(|part| scope.spawn(|| part.iter().map(try_one).collect::<Vec<_>>()))
-                    .collect();
-                handles.into_iter().flat_map(|h| h.join().unwrap_or_default()).collect()
-            })
+        // candidates are independent: flattened side by side on rayon's pool (the process's one
+        // thread budget, issue #15), results in candidate order
+        let results: Vec<Option<(Panel, Trial, f64)>> = if opts.parallel {
+            use rayon::prelude::*;
+            paths.par_iter().map(try_one).collect()
         } else {
             paths.iter().map(try_one).collect()
         };

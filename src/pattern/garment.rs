@@ -50,6 +50,7 @@
 use std::collections::BTreeMap;
 
 use glam::{DVec2, DVec3};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::assemble::{
@@ -635,41 +636,53 @@ fn pattern_once(
         // with negotiated seams, the search's last flattening is the free one the negotiation needs
         let mut free: Vec<Option<Trial>> = vec![None; panels.len()];
         if find_darts {
+            // the panels' searches are independent: side by side on rayon's pool (issue #15),
+            // the first failure in panel order reported
+            let fresh: Vec<(usize, Result<Searched, PatternError>)> = (0..panels.len())
+                .filter(|&i| second_of[i].is_none() && !searched[i].as_ref().is_some_and(|(c, _)| *c == cap[i]))
+                .collect::<Vec<_>>()
+                .into_par_iter()
+                .map(|i| {
+                    let options = AutoDartOptions { max_darts: cap[i], ..opts.auto_darts };
+                    (i, search_darts(&panels[i], &seams, n_nodes, opts, &options))
+                })
+                .collect();
+            for (i, found) in fresh {
+                searched[i] = Some((cap[i], found?));
+            }
             for (i, panel) in panels.iter_mut().enumerate() {
                 if second_of[i].is_some() {
                     continue;
                 }
-                let hit = searched[i].as_ref().filter(|(c, _)| *c == cap[i]).map(|(_, s)| s.clone());
-                let found = match hit {
-                    Some(found) => found,
-                    None => {
-                        let options = AutoDartOptions { max_darts: cap[i], ..opts.auto_darts };
-                        let found = search_darts(panel, &seams, n_nodes, opts, &options)?;
-                        searched[i] = Some((cap[i], found.clone()));
-                        found
-                    }
-                };
+                let Some((_, found)) = searched[i].clone() else { continue };
                 (*panel, found_darts[i], free[i]) = (found.panel, found.darts, Some(found.last));
             }
             let plane = mirror_plane(t, positions);
-            for i in 0..panels.len() {
-                let Some(first) = second_of[i] else { continue };
-                let first_panel = panels[first].clone();
-                let mirrored = plane.and_then(|plane| {
-                    mirror_darts(&first_panel, &found_darts[first], &mut panels[i], positions, plane, opts)
-                });
-                match mirrored {
-                    Some(darts) => {
-                        found_darts[i] = darts;
-                        free[i] = Some(flatten_free(&panels[i], &seams, &opts.flatten)?);
-                    }
-                    None => {
-                        // not a mirror image here (a scan): searched on its own
-                        let options = AutoDartOptions { max_darts: cap[i], ..opts.auto_darts };
-                        let found = search_darts(&panels[i], &seams, n_nodes, opts, &options)?;
-                        (panels[i], found_darts[i], free[i]) = (found.panel, found.darts, Some(found.last));
-                    }
-                }
+            let seconds: Vec<(usize, Result<Searched, PatternError>)> = (0..panels.len())
+                .filter_map(|i| Some((i, second_of[i]?)))
+                .collect::<Vec<_>>()
+                .into_par_iter()
+                .map(|(i, first)| {
+                    let mut panel = panels[i].clone();
+                    let mirrored = plane.and_then(|plane| {
+                        mirror_darts(&panels[first], &found_darts[first], &mut panel, positions, plane, opts)
+                    });
+                    let done = match mirrored {
+                        Some(darts) => {
+                            flatten_free(&panel, &seams, &opts.flatten).map(|last| Searched { panel, darts, last })
+                        }
+                        None => {
+                            // not a mirror image here (a scan): searched on its own
+                            let options = AutoDartOptions { max_darts: cap[i], ..opts.auto_darts };
+                            search_darts(&panels[i], &seams, n_nodes, opts, &options)
+                        }
+                    };
+                    (i, done)
+                })
+                .collect();
+            for (i, done) in seconds {
+                let found = done?;
+                (panels[i], found_darts[i], free[i]) = (found.panel, found.darts, Some(found.last));
             }
         }
         if let Search::Carry(planned) = search {
@@ -681,7 +694,12 @@ fn pattern_once(
             let free = if find_darts {
                 free.into_iter().flatten().collect()
             } else {
-                panels.iter().map(|p| flatten_free(p, &seams, &opts.flatten)).collect::<Result<Vec<_>, _>>()?
+                panels
+                    .par_iter()
+                    .map(|p| flatten_free(p, &seams, &opts.flatten))
+                    .collect::<Vec<_>>()
+                    .into_iter()
+                    .collect::<Result<Vec<_>, _>>()?
             };
             negotiate(&panels, &free, &seams, n_nodes, opts.negotiation_power)
         } else {
@@ -691,9 +709,16 @@ fn pattern_once(
         let mut placed = Vec::with_capacity(panels.len());
         let mut reports = Vec::with_capacity(panels.len());
         let mut refused = false;
-        for (i, (panel, found_darts)) in panels.iter().zip(found_darts).enumerate() {
-            let holds = seam_chains(panel, &seams, &sewn, true);
-            let flat = flatten_held(panel, &holds, &opts.flatten).map_err(flatten_error(panel))?;
+        // the panels' flattenings with the negotiated seams, side by side
+        let flats: Vec<Result<Flattening, PatternError>> = panels
+            .par_iter()
+            .map(|panel| {
+                let holds = seam_chains(panel, &seams, &sewn, true);
+                flatten_held(panel, &holds, &opts.flatten).map_err(flatten_error(panel))
+            })
+            .collect();
+        for (i, ((panel, found_darts), flat)) in panels.iter().zip(found_darts).zip(flats).enumerate() {
+            let flat = flat?;
             let d = distortion(&panel.positions, &panel.triangles, &flat.uv);
             let p = assemble(t, panel, &seams, &lineage, &flat.uv, size, &opts.piece)?;
             let sew_line_self_intersects = self_intersects(&p.piece.sew_line);
@@ -1119,7 +1144,7 @@ mod tests {
         let coarse = RefineMesh::from_coarse(&m0, &edges).expect("coarse");
         let (fine, _) = refine(coarse, &RefineOptions::default(), |_, _| {}).expect("refine");
         let opts = PatternOptions {
-            auto_darts: AutoDartOptions { target_strain_p95: 0.0, threads: 1, ..Default::default() },
+            auto_darts: AutoDartOptions { target_strain_p95: 0.0, parallel: false, ..Default::default() },
             ..Default::default()
         };
         let found = pattern(&t, &fine.positions, &fine.triangles, 3, "ref", &opts).expect("pattern");
