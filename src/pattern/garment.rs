@@ -639,7 +639,7 @@ fn pattern_once(
             // the panels' searches are independent: side by side on rayon's pool (issue #15),
             // the first failure in panel order reported
             let fresh: Vec<(usize, Result<Searched, PatternError>)> = (0..panels.len())
-                .filter(|&i| second_of[i].is_none() && !searched[i].as_ref().is_some_and(|(c, _)| *c == cap[i]))
+                .filter(|&i| second_of[i].is_none() && searched[i].as_ref().is_none_or(|(c, _)| *c != cap[i]))
                 .collect::<Vec<_>>()
                 .into_par_iter()
                 .map(|i| {
