@@ -66,6 +66,7 @@
 use std::collections::{BTreeMap, BTreeSet};
 
 use glam::DVec3;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::landmarks::{hm08_landmarks, Hm08LandmarkOptions, LandmarkError};
@@ -393,12 +394,19 @@ pub fn fit_size(model: &BodyModel, row: &SizeRow, opts: &FitOptions) -> Result<F
         // Jacobian
         let k = vars.len();
         let mut jac = vec![vec![0.0; k]; r.len()];
-        for j in 0..k {
-            let (lo, hi) = bounds(vars[j]);
-            let h = if x[j] + opts.fd_step <= hi { opts.fd_step } else { -opts.fd_step };
-            let mut xp = x.clone();
-            xp[j] = (x[j] + h).clamp(lo, hi);
-            let rp = eval(&xp)?;
+        // the columns are independent bodies: built and measured side by side (issue #15)
+        let columns: Vec<(f64, Result<Vec<f64>, FitError>)> = (0..k)
+            .into_par_iter()
+            .map(|j| {
+                let (lo, hi) = bounds(vars[j]);
+                let h = if x[j] + opts.fd_step <= hi { opts.fd_step } else { -opts.fd_step };
+                let mut xp = x.clone();
+                xp[j] = (x[j] + h).clamp(lo, hi);
+                (h, eval(&xp))
+            })
+            .collect();
+        for (j, (h, rp)) in columns.into_iter().enumerate() {
+            let rp = rp?;
             for i in 0..r.len() {
                 jac[i][j] = (rp[i] - r[i]) / h;
             }

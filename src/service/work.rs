@@ -231,11 +231,13 @@ impl Timer {
 impl WorkContext {
     fn obstacle(&self, mesh: &TriMesh, cache: bool) -> Result<Option<Arc<Obstacle>>, WorkError> {
         let Some(gpu) = &self.gpu else { return Ok(None) };
+        // the winding tree is built on the CPU while the maps render (issue #15)
         let build = || -> Result<Obstacle, RenderError> {
-            Ok(Obstacle {
-                maps: gpu.render(mesh, &self.opts.render)?,
-                tree: WindingTree::new(mesh, &WindingOptions::default()),
-            })
+            let (maps, tree) = rayon::join(
+                || gpu.render(mesh, &self.opts.render),
+                || WindingTree::new(mesh, &WindingOptions::default()),
+            );
+            Ok(Obstacle { maps: maps?, tree })
         };
         Ok(Some(if cache {
             self.obstacles.get_or_build(BodyKey::of(mesh, &self.opts.render), build)?
@@ -282,36 +284,63 @@ fn base_first(total: usize, base: usize) -> impl Iterator<Item = usize> {
     std::iter::once(base).chain((0..total).filter(move |&i| i != base))
 }
 
-/// A run's bodies in two steps: `first` on the base index `base` (its result
-/// `B` — the base body, the run's dart plans — is what every other body is
-/// made from), then `rest` on every other index of `0..total` side by side
-/// on rayon's global pool (one process-wide budget of CPU threads, shared by
-/// every request), each with its own stage timer, summed into `timer`. Each
-/// call gets `(index, how many bodies were started before it)`, the latter
-/// for progress. Results by index; the first failure in the sequential
-/// order (the base, then the others in index order) is the one returned, as
-/// one body after another would report it.
-fn base_then_rest<B: Sync, T: Send>(
+/// A run's bodies in three steps, on rayon's global pool (one process-wide
+/// budget of CPU threads, shared by every request):
+/// 1. `prepare_base` on the base index `base`: its body (fitted, or read)
+///    and obstacle, what every other body is prepared from;
+/// 2. `finish_base` on it — the base's grades, whose result `B` (the run's
+///    dart plans) every other body is finished with — while the first
+///    `ahead` other bodies are prepared alongside (`prepare_rest`, from the
+///    base's preparation alone; issue #15: the base's grade leaves cores
+///    idle, and a prepared body holds its obstacle, about 35 MB, so only a
+///    few go ahead);
+/// 3. every other body prepared (unless it went ahead) and finished
+///    (`finish_rest`) side by side.
+///
+/// Each body has its own stage timer, summed into `timer`, and gets
+/// `(index, how many bodies were started before it)`, the latter for
+/// progress. Results by index; the first failure in the sequential order
+/// (the base, then the others in index order) is the one returned, as one
+/// body after another would report it.
+#[expect(clippy::too_many_arguments, reason = "the run's shape and its four steps")]
+fn base_then_rest<P: Send + Sync, B: Send + Sync, T: Send>(
     total: usize,
     base: usize,
+    ahead: usize,
     timer: &mut Timer,
-    first: impl FnOnce(usize, &mut Timer) -> Result<(B, T), WorkError>,
-    rest: impl Fn((usize, usize), &B, &mut Timer) -> Result<T, WorkError> + Sync,
+    prepare_base: impl FnOnce(usize, &mut Timer) -> Result<P, WorkError>,
+    prepare_rest: impl Fn((usize, usize), &P, &mut Timer) -> Result<P, WorkError> + Sync,
+    finish_base: impl FnOnce(&P, &mut Timer) -> Result<(B, T), WorkError> + Send,
+    finish_rest: impl Fn((usize, usize), P, &B, &mut Timer) -> Result<T, WorkError> + Sync,
 ) -> Result<Vec<Option<T>>, WorkError> {
     use rayon::prelude::*;
     use std::sync::atomic::{AtomicUsize, Ordering};
     let mut done: Vec<Option<T>> = (0..total).map(|_| None).collect();
     let mut order = base_first(total, base).filter(|&i| i < total);
     let Some(b) = order.next() else { return Ok(done) };
-    let (made, t) = first(b, timer)?;
-    done[b] = Some(t);
     let others: Vec<usize> = order.collect();
     let started = AtomicUsize::new(1);
+    let p_base = prepare_base(b, timer)?;
+    // one other body prepared: its ordinal, its preparation and its timer so far
+    let prepare = |i: usize| {
+        let at = (i, started.fetch_add(1, Ordering::Relaxed));
+        let mut own = Timer(BTreeMap::new());
+        let p = prepare_rest(at, &p_base, &mut own);
+        (at, p, own)
+    };
+    let (early, _) = others.split_at(ahead.min(others.len()));
+    let (base_done, early) =
+        rayon::join(|| finish_base(&p_base, timer), || early.par_iter().map(|&i| prepare(i)).collect::<Vec<_>>());
+    let (made, t) = base_done?;
+    done[b] = Some(t);
+    let mut early = early.into_iter();
+    let prepared: Vec<_> = others.iter().map(|_| early.next()).collect();
     let results: Vec<Result<(T, Timer), WorkError>> = others
         .par_iter()
-        .map(|&i| {
-            let mut own = Timer(BTreeMap::new());
-            rest((i, started.fetch_add(1, Ordering::Relaxed)), &made, &mut own).map(|t| (t, own))
+        .zip(prepared)
+        .map(|(&i, pre)| {
+            let (at, p, mut own) = pre.unwrap_or_else(|| prepare(i));
+            finish_rest(at, p?, &made, &mut own).map(|t| (t, own))
         })
         .collect();
     for (&i, result) in others.iter().zip(results) {
@@ -324,10 +353,20 @@ fn base_then_rest<B: Sync, T: Send>(
     Ok(done)
 }
 
+/// How many other bodies of a run are prepared while its base is graded
+/// ([`base_then_rest`]): one per thread of the pool.
+fn prepared_ahead() -> usize {
+    rayon::current_num_threads()
+}
+
 /// The dart plan of each template's grade, in template order (a run's base size).
 fn plans_of(graded: &[(String, Graded, serde_json::Value)]) -> Vec<DartPlan> {
     graded.iter().map(|(_, g, _)| g.pattern.dart_plan.clone()).collect()
 }
+
+/// A body of a batch prepared for grading: its index, its feature model and
+/// its obstacle.
+type Prepared = (usize, FeatureBody, Option<Arc<Obstacle>>);
 
 /// One graded body of a run, kept until the run is reported in request
 /// order: its grades (template name, grade, fit figures), its report part
@@ -342,21 +381,21 @@ fn grade_body(
     ctx: &WorkContext,
     templates: &[Template],
     body: &FeatureBody,
+    obstacle: Option<&Obstacle>,
     size: &str,
-    cache_obstacle: bool,
     plans: Option<&[DartPlan]>,
     timer: &mut Timer,
     out: &mut Vec<Artefact>,
 ) -> Result<Vec<(String, Graded, serde_json::Value)>, WorkError> {
-    let start = Instant::now();
-    let obstacle = ctx.obstacle(&body.mesh, cache_obstacle)?;
-    timer.add(stage::OBSTACLE, start);
     let mut graded = Vec::with_capacity(templates.len());
     let carry = !ctx.opts.grade.pattern.search_every_size;
     for (i, t) in templates.iter().enumerate() {
         let plan = plans.filter(|_| carry).and_then(|p| p.get(i));
-        let g = grade_with_plan(t, body, obstacle.as_deref(), size, &ctx.opts.grade, plan)
-            .map_err(|source| WorkError::Grade { template: t.name.clone(), size: size.to_owned(), source })?;
+        let g = grade_with_plan(t, body, obstacle, size, &ctx.opts.grade, plan).map_err(|source| WorkError::Grade {
+            template: t.name.clone(),
+            size: size.to_owned(),
+            source,
+        })?;
         timer.add_ms(stage::DECODE, g.timings.decode_ms);
         timer.add_ms(stage::REFINE, g.timings.refine_ms);
         timer.add_ms(stage::CLEAR, g.timings.clear_ms);
@@ -364,7 +403,7 @@ fn grade_body(
         let start = Instant::now();
         let stem = format!("{}-{}", t.name, size);
         out.extend(pattern_artefacts(&t.name, size, &g)?);
-        let (glb, fit) = garment_glb(t, &g, body, obstacle.as_deref())?;
+        let (glb, fit) = garment_glb(t, &g, body, obstacle)?;
         out.push(Artefact { name: format!("{stem}.garment.glb"), media_type: "model/gltf-binary", bytes: glb });
         timer.add(stage::EXPORT, start);
         graded.push((t.name.clone(), g, fit));
@@ -623,13 +662,12 @@ pub fn size_chart(
     let fit_opts = FitOptions::for_sex(chart.sex);
     // the base size first: its dart plan is carried to every other size (one plan per run)
     let base_row = chart.rows.iter().position(|r| r.size == base).unwrap_or(0);
-    // one size (`done` sizes started before it): fitted (the base size) or graded from the
-    // base size's body, then every template graded on it with the base size's dart plans
-    let one_size = |(i, done): (usize, usize),
-                    base_fit: Option<&FittedMannequin>,
-                    plans: Option<&[DartPlan]>,
-                    timer: &mut Timer|
-     -> Result<(FittedMannequin, Done), WorkError> {
+    // one size prepared (`done` sizes started before it): fitted (the base size) or graded from
+    // the base size's body, and its obstacle
+    let prepare_size = |(i, done): (usize, usize),
+                        base_fit: Option<&FittedMannequin>,
+                        timer: &mut Timer|
+     -> Result<(FittedMannequin, Option<Arc<Obstacle>>), WorkError> {
         let row = &chart.rows[i];
         progress(stage::FIT, done, total);
         let start = Instant::now();
@@ -639,9 +677,21 @@ pub fn size_chart(
         }
         .map_err(|source| WorkError::Fit { size: row.size.clone(), source })?;
         timer.add(stage::FIT, start);
+        let start = Instant::now();
+        let obstacle = ctx.obstacle(&fitted.body.mesh, true)?;
+        timer.add(stage::OBSTACLE, start);
+        Ok((fitted, obstacle))
+    };
+    // one size finished: every template graded on it with the base size's dart plans
+    let grade_size = |(i, done): (usize, usize),
+                      (fitted, obstacle): &(FittedMannequin, Option<Arc<Obstacle>>),
+                      plans: Option<&[DartPlan]>,
+                      timer: &mut Timer|
+     -> Result<Done, WorkError> {
+        let row = &chart.rows[i];
         progress(stage::REFINE, done, total);
         let mut out = Vec::new();
-        let graded = grade_body(ctx, templates, &fitted.body, &row.size, true, plans, timer, &mut out)?;
+        let graded = grade_body(ctx, templates, &fitted.body, obstacle.as_deref(), &row.size, plans, timer, &mut out)?;
         let residuals: BTreeMap<&str, serde_json::Value> = fitted
             .residuals
             .iter()
@@ -653,20 +703,22 @@ pub fn size_chart(
             })
             .collect();
         let mannequin = serde_json::json!({"residuals": residuals, "warnings": fitted.body.warnings});
-        Ok((fitted, (graded, mannequin, out)))
+        Ok((graded, mannequin, out))
     };
     // the base size first: its body is the one every other size grows from, its dart plan
     // the run's (one plan per run); the others side by side
     let done_rows = base_then_rest(
         total,
         base_row,
+        prepared_ahead(),
         &mut timer,
-        |i, timer| {
-            let (fitted, done) = one_size((i, 0), None, None, timer)?;
-            let plans = plans_of(&done.0);
-            Ok(((fitted, plans), done))
+        |i, timer| prepare_size((i, 0), None, timer),
+        |at, (base_fit, _), timer| prepare_size(at, Some(base_fit), timer),
+        |p, timer| {
+            let done = grade_size((base_row, 0), p, None, timer)?;
+            Ok((plans_of(&done.0), done))
         },
-        |at, (base_fit, plans), timer| one_size(at, Some(base_fit), Some(plans), timer).map(|(_, done)| done),
+        |at, p, plans, timer| grade_size(at, &p, Some(plans), timer),
     )?;
     // reported in the chart's order
     let mut rows = Vec::with_capacity(total);
@@ -722,33 +774,46 @@ pub fn bodies(
     let mut reports = Vec::new();
     let total = inputs.len();
     let base_at = base.and_then(|b| inputs.iter().position(|i| i.name == b)).unwrap_or(0);
-    // one body (`done` bodies started before it)
-    let one_body =
-        |(i, done): (usize, usize), plans: Option<&[DartPlan]>, timer: &mut Timer| -> Result<Done, WorkError> {
-            let input = &inputs[i];
-            progress(stage::BODY, done, total);
-            let start = Instant::now();
-            let body = read_body(input, &ctx.opts)?;
-            timer.add(stage::BODY, start);
-            progress(stage::REFINE, done, total);
-            let mut out = Vec::new();
-            let graded = grade_body(ctx, templates, &body, input.name, false, plans, timer, &mut out)?;
-            let measurements: BTreeMap<&str, f64> =
-                measure(&body, &MeasureOptions::default()).iter().map(|(id, v)| (id.as_str(), *v)).collect();
-            // what derivation accepted but a person should look at (issue #13: warnings, not refusals)
-            let about = serde_json::json!({"measurements_m": measurements, "warnings": body.warnings});
-            Ok((graded, about, out))
-        };
+    // one body prepared (`done` bodies started before it): read, its features derived, its obstacle
+    let prepare_body = |(i, done): (usize, usize), timer: &mut Timer| -> Result<Prepared, WorkError> {
+        progress(stage::BODY, done, total);
+        let start = Instant::now();
+        let body = read_body(&inputs[i], &ctx.opts)?;
+        timer.add(stage::BODY, start);
+        let start = Instant::now();
+        let obstacle = ctx.obstacle(&body.mesh, false)?;
+        timer.add(stage::OBSTACLE, start);
+        Ok((i, body, obstacle))
+    };
+    // one body finished: every template graded on it
+    let grade_one = |done: usize,
+                     (i, body, obstacle): &Prepared,
+                     plans: Option<&[DartPlan]>,
+                     timer: &mut Timer|
+     -> Result<Done, WorkError> {
+        let input = &inputs[*i];
+        progress(stage::REFINE, done, total);
+        let mut out = Vec::new();
+        let graded = grade_body(ctx, templates, body, obstacle.as_deref(), input.name, plans, timer, &mut out)?;
+        let measurements: BTreeMap<&str, f64> =
+            measure(body, &MeasureOptions::default()).iter().map(|(id, v)| (id.as_str(), *v)).collect();
+        // what derivation accepted but a person should look at (issue #13: warnings, not refusals)
+        let about = serde_json::json!({"measurements_m": measurements, "warnings": body.warnings});
+        Ok((graded, about, out))
+    };
     // the base body first (several bodies: a run): its dart plan is carried to the others
     let done_bodies = base_then_rest(
         total,
         base_at,
+        prepared_ahead(),
         &mut timer,
-        |i, timer| {
-            let done = one_body((i, 0), None, timer)?;
+        |i, timer| prepare_body((i, 0), timer),
+        |at, _, timer| prepare_body(at, timer),
+        |p, timer| {
+            let done = grade_one(0, p, None, timer)?;
             Ok((plans_of(&done.0), done))
         },
-        |at, plans, timer| one_body(at, Some(plans), timer),
+        |(_, done), p, plans, timer| grade_one(done, &p, Some(plans), timer),
     )?;
     for (input, done) in inputs.iter().zip(done_bodies) {
         let Some((graded, about, out)) = done else { continue };
