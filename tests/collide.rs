@@ -15,7 +15,7 @@
 //! threshold) are written.
 
 use glam::DVec3;
-use grade3d::collide::depth::{decode_depth, DepthMap, View};
+use grade3d::collide::depth::{DepthMap, View};
 use grade3d::collide::render::{GpuContext, RenderOptions};
 use grade3d::geom::mesh::{FaceId, TriMesh};
 
@@ -173,10 +173,12 @@ fn check_body_maps(gpu: &GpuContext) {
     assert_eq!(maps.len(), 2);
     for (k, m) in maps.iter().enumerate() {
         let (front, back) = rasterise(&mesh, &m.view, n);
-        let world = |px: &[[u8; 4]]| -> Vec<f32> {
-            px.iter().map(|&p| decode_depth(&m.view, p).map_or(f32::NAN, |w| w as f32)).collect()
+        let px = (n * n) as usize;
+        let world = |depth: &dyn Fn(usize) -> Option<f64>| -> Vec<f32> {
+            (0..px).map(|i| depth(i).map_or(f32::NAN, |w| w as f32)).collect()
         };
-        for (which, g, c) in [("front", &world(&m.front), &front), ("back", &world(&m.back), &back)] {
+        let (gf, gb) = (world(&|i| m.front_depth(i)), world(&|i| m.back_depth(i)));
+        for (which, g, c) in [("front", &gf, &front), ("back", &gb, &back)] {
             let name = format!("{:?}-view{k}-{which}", info.backend);
             let cmp = compare(&name, n, g, c, &m.view);
             eprintln!(

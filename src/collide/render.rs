@@ -374,30 +374,25 @@ struct Targets {
 }
 
 /// The depth map of `view` from its mapped read-backs (per pass: packed
-/// depth, normals; rows `padded_row` bytes apart): the rows copied as
-/// rendered, without the padding, and the buffers unmapped.
+/// depth, normals; rows `padded_row` bytes apart): each row's covered run
+/// copied as rendered ([`DepthMap::from_rows`]), and the buffers unmapped.
 fn decode(view: &View, bufs: &[[wgpu::Buffer; 2]; 2], n: u32, padded_row: u32) -> Result<DepthMap, RenderError> {
     let (row, stride) = ((4 * n) as usize, padded_row as usize);
-    let copy = |buf: &wgpu::Buffer| -> Result<Vec<[u8; 4]>, RenderError> {
-        let data = buf.slice(..).get_mapped_range().map_err(|e| RenderError::Readback(e.to_string()))?;
-        let mut out: Vec<[u8; 4]> = Vec::with_capacity((n * n) as usize);
-        for y in 0..n as usize {
-            out.extend_from_slice(bytemuck::cast_slice(&data[y * stride..y * stride + row]));
-        }
-        drop(data);
-        buf.unmap();
-        Ok(out)
-    };
     let [[front, front_normal], [back, back_normal]] = bufs;
-    Ok(DepthMap {
-        view: *view,
-        width: n,
-        height: n,
-        front: copy(front)?,
-        back: copy(back)?,
-        front_normal: copy(front_normal)?,
-        back_normal: copy(back_normal)?,
-    })
+    let all = [front, back, front_normal, back_normal];
+    let mapped = all
+        .iter()
+        .map(|b| b.slice(..).get_mapped_range().map_err(|e| RenderError::Readback(e.to_string())))
+        .collect::<Result<Vec<_>, _>>()?;
+    let image_row = |k: usize, y: usize| -> &[[u8; 4]] {
+        mapped.get(k).map_or(&[], |data| bytemuck::cast_slice(&data[y * stride..y * stride + row]))
+    };
+    let map = DepthMap::from_rows(*view, n, n, |y| [0, 1, 2, 3].map(|k| image_row(k, y)));
+    drop(mapped);
+    for b in all {
+        b.unmap();
+    }
+    Ok(map)
 }
 
 /// Distance a depth code step represents along a view, m (for tolerances).
