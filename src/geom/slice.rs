@@ -13,8 +13,6 @@
 //! Preconditions: a validated [`TriMesh`]. No failure modes: a plane that
 //! misses the mesh gives an empty list.
 
-use std::collections::HashMap;
-
 use glam::DVec3;
 
 use super::mesh::{TriMesh, VertexId};
@@ -44,8 +42,8 @@ pub fn slice(mesh: &TriMesh, plane: &Plane) -> Vec<Section> {
     let d: Vec<f64> = pos.iter().map(|&p| plane.signed_distance(p)).collect();
     let positive = |v: VertexId| d[v.idx()] >= 0.0;
 
-    // segments as pairs of edge keys
-    let mut edge_index: HashMap<(VertexId, VertexId), u32> = HashMap::new();
+    // segments as pairs of edge keys (the index is looked up, never iterated: FxHash, issue #15)
+    let mut edge_index: rustc_hash::FxHashMap<(VertexId, VertexId), u32> = rustc_hash::FxHashMap::default();
     let mut edge_list: Vec<(VertexId, VertexId)> = Vec::new();
     let mut incident: Vec<Vec<u32>> = Vec::new(); // edge -> segment ids
     let mut segments: Vec<[u32; 2]> = Vec::new();
