@@ -501,10 +501,9 @@ pub fn fit_size(model: &BodyModel, row: &SizeRow, opts: &FitOptions) -> Result<F
 struct ScaleSolver {
     /// The profiles solved, the order of `jac`'s rows and columns.
     ids: Vec<MeasurementId>,
-    /// `J = ∂m_i/∂s_j`, m per unit of scale.
+    /// `J = ∂m_i/∂s_j`, m per unit of scale; a diagonal entry not yet
+    /// estimated (0) is taken as `m_k / s_k` when it is first needed.
     jac: Vec<Vec<f64>>,
-    /// Whether `jac` holds an estimate yet (a prior, or a first observation).
-    primed: bool,
     /// Scales and girths of the last observation.
     last: Option<(Vec<f64>, Vec<f64>)>,
 }
@@ -522,19 +521,17 @@ impl ScaleSolver {
     ) -> Self {
         let n = ids.len();
         let mut jac = vec![vec![0.0; n]; n];
-        let mut primed = false;
         if let Some(p) = prior {
             let at = |id: &MeasurementId| p.ids.iter().position(|x| x == id);
             for (i, a) in ids.iter().enumerate() {
                 for (j, b) in ids.iter().enumerate() {
                     if let (Some(pi), Some(pj)) = (at(a), at(b)) {
                         jac[i][j] = p.jac[pi][pj] * prior_scales.get(b).copied().unwrap_or(1.0);
-                        primed = true;
                     }
                 }
             }
         }
-        Self { ids, jac, primed, last: None }
+        Self { ids, jac, last: None }
     }
 
     /// One round: observes the girths `measured` at `scales` and moves the
@@ -553,11 +550,6 @@ impl ScaleSolver {
         let proportional = |i: usize| r[i] * s[i] / m[i];
         let d = if m.iter().all(|v| v.is_finite() && *v > 0.0) {
             self.observe(&s, &m);
-            for (i, row) in self.jac.iter_mut().enumerate() {
-                if row[i].is_nan() || row[i] <= 0.0 {
-                    row[i] = m[i] / s[i];
-                }
-            }
             solve_dense(self.jac.clone(), r.clone())
                 .filter(|d| d.iter().all(|v| v.is_finite()))
                 .unwrap_or_else(|| (0..n).map(proportional).collect())
@@ -570,7 +562,7 @@ impl ScaleSolver {
     }
 
     /// Takes the girths `m` at scales `s`: the rank-one update of `J` from
-    /// the last observation, or `diag(m / s)` as the first estimate.
+    /// the last observation (the first only sets the diagonal's gaps).
     fn observe(&mut self, s: &[f64], m: &[f64]) {
         if let Some((s0, m0)) = &self.last {
             let ds: Vec<f64> = s.iter().zip(s0).map(|(a, b)| a - b).collect();
@@ -585,11 +577,11 @@ impl ScaleSolver {
                     }
                 }
             }
-        } else if !self.primed {
-            for (i, row) in self.jac.iter_mut().enumerate() {
+        }
+        for (i, row) in self.jac.iter_mut().enumerate() {
+            if row[i].is_nan() || row[i] <= 0.0 {
                 row[i] = m[i] / s[i];
             }
-            self.primed = true;
         }
         self.last = Some((s.to_vec(), m.to_vec()));
     }

@@ -229,7 +229,10 @@ impl Timer {
 }
 
 impl WorkContext {
-    fn obstacle(&self, mesh: &TriMesh, cache: bool) -> Result<Option<Arc<Obstacle>>, WorkError> {
+    /// The body as an obstacle (none without a GPU), from the cache or built
+    /// and, with `cache`, kept there; its time goes to `timer`'s obstacle stage.
+    fn obstacle(&self, mesh: &TriMesh, cache: bool, timer: &mut Timer) -> Result<Option<Arc<Obstacle>>, WorkError> {
+        let start = Instant::now();
         let Some(gpu) = &self.gpu else { return Ok(None) };
         // the winding tree is built on the CPU while the maps render (issue #15)
         let build = || -> Result<Obstacle, RenderError> {
@@ -239,11 +242,13 @@ impl WorkContext {
             );
             Ok(Obstacle { maps: maps?, tree })
         };
-        Ok(Some(if cache {
+        let obstacle = if cache {
             self.obstacles.get_or_build(BodyKey::of(mesh, &self.opts.render), build)?
         } else {
             Arc::new(build()?)
-        }))
+        };
+        timer.add(stage::OBSTACLE, start);
+        Ok(Some(obstacle))
     }
 }
 
@@ -288,34 +293,30 @@ fn base_first(total: usize, base: usize) -> impl Iterator<Item = usize> {
 /// budget of CPU threads, shared by every request):
 /// 1. `prepare_base` on the base index `base`: its body (fitted, or read)
 ///    and obstacle, what every other body is prepared from;
-/// 2. `finish_base` on it — the base's grades, whose result `B` (the run's
-///    dart plans) every other body is finished with — while the first
-///    `ahead` other bodies are prepared alongside (`prepare_rest`, from the
-///    base's preparation alone; issue #15: the base's grade leaves cores
-///    idle, and a prepared body holds its obstacle, about 35 MB, so only a
-///    few go ahead);
-/// 3. every other body prepared (unless it went ahead) and finished
-///    (`finish_rest`) side by side.
+/// 2. `grade` on it with no dart plans — its plans become the run's — while
+///    as many other bodies as the pool has threads are prepared alongside
+///    (`prepare_rest`, from the base's preparation alone; issue #15: the
+///    base's grade leaves cores idle, and a prepared body holds its
+///    obstacle, about 15 MB, so only a few go ahead);
+/// 3. every other body prepared (unless it went ahead) and graded with the
+///    base's plans, side by side.
 ///
 /// Each body has its own stage timer, summed into `timer`, and gets
 /// `(index, how many bodies were started before it)`, the latter for
 /// progress. Results by index; the first failure in the sequential order
 /// (the base, then the others in index order) is the one returned, as one
 /// body after another would report it.
-#[expect(clippy::too_many_arguments, reason = "the run's shape and its four steps")]
-fn base_then_rest<P: Send + Sync, B: Send + Sync, T: Send>(
+fn base_then_rest<P: Send + Sync>(
     total: usize,
     base: usize,
-    ahead: usize,
     timer: &mut Timer,
     prepare_base: impl FnOnce(usize, &mut Timer) -> Result<P, WorkError>,
     prepare_rest: impl Fn((usize, usize), &P, &mut Timer) -> Result<P, WorkError> + Sync,
-    finish_base: impl FnOnce(&P, &mut Timer) -> Result<(B, T), WorkError> + Send,
-    finish_rest: impl Fn((usize, usize), P, &B, &mut Timer) -> Result<T, WorkError> + Sync,
-) -> Result<Vec<Option<T>>, WorkError> {
+    grade: impl Fn((usize, usize), &P, Option<&[DartPlan]>, &mut Timer) -> Result<Done, WorkError> + Sync,
+) -> Result<Vec<Option<Done>>, WorkError> {
     use rayon::prelude::*;
     use std::sync::atomic::{AtomicUsize, Ordering};
-    let mut done: Vec<Option<T>> = (0..total).map(|_| None).collect();
+    let mut done: Vec<Option<Done>> = (0..total).map(|_| None).collect();
     let mut order = base_first(total, base).filter(|&i| i < total);
     let Some(b) = order.next() else { return Ok(done) };
     let others: Vec<usize> = order.collect();
@@ -328,19 +329,22 @@ fn base_then_rest<P: Send + Sync, B: Send + Sync, T: Send>(
         let p = prepare_rest(at, &p_base, &mut own);
         (at, p, own)
     };
-    let (early, _) = others.split_at(ahead.min(others.len()));
-    let (base_done, early) =
-        rayon::join(|| finish_base(&p_base, timer), || early.par_iter().map(|&i| prepare(i)).collect::<Vec<_>>());
-    let (made, t) = base_done?;
-    done[b] = Some(t);
+    let (early, _) = others.split_at(rayon::current_num_threads().min(others.len()));
+    let (base_done, early) = rayon::join(
+        || grade((b, 0), &p_base, None, timer),
+        || early.par_iter().map(|&i| prepare(i)).collect::<Vec<_>>(),
+    );
+    let base_done = base_done?;
+    let plans = plans_of(&base_done.0);
+    done[b] = Some(base_done);
     let mut early = early.into_iter();
     let prepared: Vec<_> = others.iter().map(|_| early.next()).collect();
-    let results: Vec<Result<(T, Timer), WorkError>> = others
+    let results: Vec<Result<(Done, Timer), WorkError>> = others
         .par_iter()
         .zip(prepared)
         .map(|(&i, pre)| {
             let (at, p, mut own) = pre.unwrap_or_else(|| prepare(i));
-            finish_rest(at, p?, &made, &mut own).map(|t| (t, own))
+            grade(at, &p?, Some(&plans), &mut own).map(|t| (t, own))
         })
         .collect();
     for (&i, result) in others.iter().zip(results) {
@@ -353,20 +357,14 @@ fn base_then_rest<P: Send + Sync, B: Send + Sync, T: Send>(
     Ok(done)
 }
 
-/// How many other bodies of a run are prepared while its base is graded
-/// ([`base_then_rest`]): one per thread of the pool.
-fn prepared_ahead() -> usize {
-    rayon::current_num_threads()
-}
-
 /// The dart plan of each template's grade, in template order (a run's base size).
 fn plans_of(graded: &[(String, Graded, serde_json::Value)]) -> Vec<DartPlan> {
     graded.iter().map(|(_, g, _)| g.pattern.dart_plan.clone()).collect()
 }
 
-/// A body of a batch prepared for grading: its index, its feature model and
-/// its obstacle.
-type Prepared = (usize, FeatureBody, Option<Arc<Obstacle>>);
+/// A body prepared for grading: its feature model (and, for a chart size,
+/// its fit) and its obstacle.
+type Prepared<B> = (B, Option<Arc<Obstacle>>);
 
 /// One graded body of a run, kept until the run is reported in request
 /// order: its grades (template name, grade, fit figures), its report part
@@ -667,7 +665,7 @@ pub fn size_chart(
     let prepare_size = |(i, done): (usize, usize),
                         base_fit: Option<&FittedMannequin>,
                         timer: &mut Timer|
-     -> Result<(FittedMannequin, Option<Arc<Obstacle>>), WorkError> {
+     -> Result<Prepared<FittedMannequin>, WorkError> {
         let row = &chart.rows[i];
         progress(stage::FIT, done, total);
         let start = Instant::now();
@@ -677,14 +675,12 @@ pub fn size_chart(
         }
         .map_err(|source| WorkError::Fit { size: row.size.clone(), source })?;
         timer.add(stage::FIT, start);
-        let start = Instant::now();
-        let obstacle = ctx.obstacle(&fitted.body.mesh, true)?;
-        timer.add(stage::OBSTACLE, start);
+        let obstacle = ctx.obstacle(&fitted.body.mesh, true, timer)?;
         Ok((fitted, obstacle))
     };
     // one size finished: every template graded on it with the base size's dart plans
     let grade_size = |(i, done): (usize, usize),
-                      (fitted, obstacle): &(FittedMannequin, Option<Arc<Obstacle>>),
+                      (fitted, obstacle): &Prepared<FittedMannequin>,
                       plans: Option<&[DartPlan]>,
                       timer: &mut Timer|
      -> Result<Done, WorkError> {
@@ -710,15 +706,10 @@ pub fn size_chart(
     let done_rows = base_then_rest(
         total,
         base_row,
-        prepared_ahead(),
         &mut timer,
         |i, timer| prepare_size((i, 0), None, timer),
         |at, (base_fit, _), timer| prepare_size(at, Some(base_fit), timer),
-        |p, timer| {
-            let done = grade_size((base_row, 0), p, None, timer)?;
-            Ok((plans_of(&done.0), done))
-        },
-        |at, p, plans, timer| grade_size(at, &p, Some(plans), timer),
+        grade_size,
     )?;
     // reported in the chart's order
     let mut rows = Vec::with_capacity(total);
@@ -775,23 +766,21 @@ pub fn bodies(
     let total = inputs.len();
     let base_at = base.and_then(|b| inputs.iter().position(|i| i.name == b)).unwrap_or(0);
     // one body prepared (`done` bodies started before it): read, its features derived, its obstacle
-    let prepare_body = |(i, done): (usize, usize), timer: &mut Timer| -> Result<Prepared, WorkError> {
+    let prepare_body = |(i, done): (usize, usize), timer: &mut Timer| -> Result<Prepared<FeatureBody>, WorkError> {
         progress(stage::BODY, done, total);
         let start = Instant::now();
         let body = read_body(&inputs[i], &ctx.opts)?;
         timer.add(stage::BODY, start);
-        let start = Instant::now();
-        let obstacle = ctx.obstacle(&body.mesh, false)?;
-        timer.add(stage::OBSTACLE, start);
-        Ok((i, body, obstacle))
+        let obstacle = ctx.obstacle(&body.mesh, false, timer)?;
+        Ok((body, obstacle))
     };
     // one body finished: every template graded on it
-    let grade_one = |done: usize,
-                     (i, body, obstacle): &Prepared,
+    let grade_one = |(i, done): (usize, usize),
+                     (body, obstacle): &Prepared<FeatureBody>,
                      plans: Option<&[DartPlan]>,
                      timer: &mut Timer|
      -> Result<Done, WorkError> {
-        let input = &inputs[*i];
+        let input = &inputs[i];
         progress(stage::REFINE, done, total);
         let mut out = Vec::new();
         let graded = grade_body(ctx, templates, body, obstacle.as_deref(), input.name, plans, timer, &mut out)?;
@@ -805,15 +794,10 @@ pub fn bodies(
     let done_bodies = base_then_rest(
         total,
         base_at,
-        prepared_ahead(),
         &mut timer,
         |i, timer| prepare_body((i, 0), timer),
         |at, _, timer| prepare_body(at, timer),
-        |p, timer| {
-            let done = grade_one(0, p, None, timer)?;
-            Ok((plans_of(&done.0), done))
-        },
-        |(_, done), p, plans, timer| grade_one(done, &p, Some(plans), timer),
+        grade_one,
     )?;
     for (input, done) in inputs.iter().zip(done_bodies) {
         let Some((graded, about, out)) = done else { continue };
