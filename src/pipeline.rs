@@ -72,6 +72,46 @@ pub enum PipelineError {
     /// The pattern failed.
     #[error(transparent)]
     Pattern(#[from] PatternError),
+    /// A nested option that a grade does not read was set (issue #16: it
+    /// was overwritten silently): the grade takes `top`, or the template's
+    /// default where `top` is `None`.
+    #[error("option `{nested}` is not read by a grade; set `{top}` instead (unset: the template's default)")]
+    ShadowedOption {
+        /// The nested field that was set.
+        nested: &'static str,
+        /// The field a grade reads.
+        top: &'static str,
+    },
+}
+
+impl GradeOptions {
+    /// Checks that no nested field shadowed by a top-level one
+    /// (`refine.levels` by `levels`, `collision.clearance_mm` by
+    /// `clearance_mm`, `pattern.piece.seam_allowance_mm` by
+    /// `seam_allowance_mm`) differs from its default: a grade never reads
+    /// them, so a value there would be lost.
+    ///
+    /// # Errors
+    /// [`PipelineError::ShadowedOption`] naming the first such field.
+    pub fn check(&self) -> Result<(), PipelineError> {
+        let shadowed = [
+            (self.refine.levels != RefineOptions::default().levels, "refine.levels", "levels"),
+            (
+                self.collision.clearance_mm != CollisionOptions::default().clearance_mm,
+                "collision.clearance_mm",
+                "clearance_mm",
+            ),
+            (
+                self.pattern.piece.seam_allowance_mm != PatternOptions::default().piece.seam_allowance_mm,
+                "pattern.piece.seam_allowance_mm",
+                "seam_allowance_mm",
+            ),
+        ];
+        match shadowed.into_iter().find(|s| s.0) {
+            Some((_, nested, top)) => Err(PipelineError::ShadowedOption { nested, top }),
+            None => Ok(()),
+        }
+    }
 }
 
 /// Wall time per stage, ms.
@@ -198,6 +238,7 @@ pub fn grade_with_plan(
     opts: &GradeOptions,
     plan: Option<&DartPlan>,
 ) -> Result<Graded, PipelineError> {
+    opts.check()?;
     let levels = opts.levels.unwrap_or(t.defaults.levels as usize);
     let clearance_mm = opts.clearance_mm.unwrap_or(t.defaults.clearance_mm);
     let refine_opts = RefineOptions { levels, ..opts.refine };
@@ -277,4 +318,28 @@ pub fn grade_with_plan(
             pattern_ms,
         },
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_shadowed_nested_option_is_an_error_not_overwritten() {
+        // regression (issue #16): `refine.levels`, `collision.clearance_mm` and
+        // `pattern.piece.seam_allowance_mm` were overwritten by the template's defaults
+        assert_eq!(GradeOptions::default().check(), Ok(()));
+        let mut o = GradeOptions::default();
+        o.refine.levels = 2;
+        assert_eq!(o.check(), Err(PipelineError::ShadowedOption { nested: "refine.levels", top: "levels" }));
+        let mut o = GradeOptions { levels: Some(2), ..GradeOptions::default() };
+        assert_eq!(o.check(), Ok(()));
+        o.collision.clearance_mm = 5.0;
+        let e = o.check().unwrap_err();
+        assert_eq!(e, PipelineError::ShadowedOption { nested: "collision.clearance_mm", top: "clearance_mm" });
+        assert!(e.to_string().contains("set `clearance_mm` instead"), "{e}");
+        let mut o = GradeOptions::default();
+        o.pattern.piece.seam_allowance_mm = 15.0;
+        assert!(matches!(o.check(), Err(PipelineError::ShadowedOption { top: "seam_allowance_mm", .. })));
+    }
 }

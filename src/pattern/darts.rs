@@ -35,7 +35,7 @@
 //!
 //! Pure: data in, data out; the flattening is the caller's closure, so this
 //! module knows nothing of seams or options beyond its own. A candidate
-//! whose slit or flattening fails is skipped, never an error. The result is
+//! whose slit or flattening fails (or panics) is skipped, never an error. The result is
 //! the panel (with its new darts), its flattening and what each dart did; when
 //! nothing helps it is the input unchanged. Deterministic: ties break on
 //! vertex ids.
@@ -203,12 +203,19 @@ pub fn insert_darts(
         let before = best.distortion.strain_p95;
         let name = format!("dart_auto_{}_{}", panel.name, found.len() + 1);
         let paths = candidate_paths(&panel, &best.flat.uv, n_nodes, opts);
+        // a candidate that panics is skipped like one that fails: its own result, in its own
+        // place, so that the others stay paired with their paths (issue #16: a panicking
+        // thread's whole chunk came back empty and shifted every later result)
         let try_one = |path: &Vec<u32>| -> Option<(Panel, Trial, f64)> {
-            let mut trial_panel = panel.clone();
-            trial_panel.add_dart(&name, path).ok()?;
-            let trial = flatten(&trial_panel)?;
-            let intake = acceptable(&trial_panel, &trial, min_intake)?;
-            Some((trial_panel, trial, intake))
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                let mut trial_panel = panel.clone();
+                trial_panel.add_dart(&name, path).ok()?;
+                let trial = flatten(&trial_panel)?;
+                let intake = acceptable(&trial_panel, &trial, min_intake)?;
+                Some((trial_panel, trial, intake))
+            }))
+            .ok()
+            .flatten()
         };
         // candidates are independent: flattened side by side on rayon's pool (the process's one
         // thread budget, issue #15), results in candidate order
@@ -449,6 +456,25 @@ mod tests {
         for w in found.windows(2) {
             assert!(w[1].strain_p95_after < w[0].strain_p95_after);
         }
+    }
+
+    #[test]
+    fn a_panicking_candidate_is_skipped_like_a_failing_one_and_the_rest_stay_paired() {
+        // regression (issue #16): a panicking search thread's chunk came back empty and the
+        // later results were paired with the wrong paths. Planted answer: candidates whose
+        // newest apex has an even id panic in one run and fail (`None`) in the other; the
+        // searches must agree, side by side on the pool
+        let p = panel(cap(0.3, 30.0, 24));
+        let even_apex = |q: &Panel| q.darts.last().and_then(|d| d.a.last()).is_some_and(|v| v % 2 == 0);
+        let opts = AutoDartOptions { parallel: true, ..AutoDartOptions::default() };
+        let failing =
+            insert_darts(&p, flat(&p).unwrap(), 0, 3e-3, &opts, |q: &Panel| if even_apex(q) { None } else { flat(q) });
+        let panicking = insert_darts(&p, flat(&p).unwrap(), 0, 3e-3, &opts, |q: &Panel| {
+            assert!(!even_apex(q), "planted panic");
+            flat(q)
+        });
+        assert!(!failing.2.is_empty(), "the odd apexes still find a dart");
+        assert_eq!(panicking, failing);
     }
 
     #[test]

@@ -13,9 +13,17 @@ use crate::io::gltf::GltfError;
 use crate::io::landmarks::LandmarkFileError;
 use crate::mannequin::fit::FitError;
 use crate::mannequin::size_chart::SizeChartError;
+use crate::pattern::assemble::PieceError;
 use crate::pattern::export::rul::CreatedError;
+use crate::pattern::flatten::FlattenError;
+use crate::pattern::garment::PatternError;
+use crate::pattern::panels::PanelError;
 use crate::pipeline::PipelineError;
+use crate::refine::clear::ClearError;
+use crate::refine::subdivide::RefineError;
+use crate::template::codec::CodecError;
 use crate::template::format::TemplateError;
+use crate::template::profile::ProfileError;
 
 fn internal(what: &dyn std::fmt::Display) -> Problem {
     tracing::error!(error = %what, "internal error");
@@ -145,7 +153,8 @@ impl From<WorkError> for Problem {
             WorkError::Model { .. }
             | WorkError::Render { .. }
             | WorkError::Export { .. }
-            | WorkError::GarmentGlb { .. } => internal(&detail),
+            | WorkError::GarmentGlb { .. }
+            | WorkError::Serialise { .. } => internal(&detail),
             WorkError::Fit { source, .. } => match source {
                 FitError::Mannequin { .. } | FitError::Landmark { .. } => internal(&detail),
                 FitError::Feature(f) => Problem::unprocessable(feature_slug(f), detail).field("chart"),
@@ -171,17 +180,144 @@ impl From<WorkError> for Problem {
                 Problem::new(StatusCode::PAYLOAD_TOO_LARGE, "scan-too-many-vertices", "Body scan too large", detail)
                     .field("scan")
             }
-            WorkError::Grade { source, .. } => {
-                let slug = match source {
-                    PipelineError::Decode { .. } => "template-does-not-fit",
-                    PipelineError::Refine { .. } => "refine-failed",
-                    PipelineError::Clear { .. } => "garment-cannot-clear-body",
-                    PipelineError::Pattern { .. } => "pattern-failed",
-                };
-                Problem::unprocessable(slug, detail).field("templates")
-            }
+            WorkError::Grade { source, .. } => match grade_failure(source) {
+                GradeFailure::OnThisBody(slug) => Problem::unprocessable(slug, detail).field("templates"),
+                GradeFailure::Template => {
+                    Problem::unprocessable("template-cannot-be-graded", detail).field("templates")
+                }
+                GradeFailure::Internal => internal(&detail),
+            },
             WorkError::Nest { .. } => Problem::unprocessable("grading-failed", detail).field("templates"),
             WorkError::UnknownBaseSize { .. } => Problem::bad_request("unknown-base-size", detail).field("base_size"),
         }
+    }
+}
+
+/// Who a failed grade is down to (issue #16: the pipeline's errors mapped
+/// to the leaf, so that an internal fault never leaves as a 422 carrying
+/// internal detail).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum GradeFailure {
+    /// The template cannot follow this body (its geometry): 422 with the slug.
+    OnThisBody(&'static str),
+    /// The template's own structure (the same on every body): 422, field `templates`.
+    Template,
+    /// Our fault (inputs that passed validation, options, numerics): a bare 500.
+    Internal,
+}
+
+/// Every leaf of [`PipelineError`], classified in one exhaustive match per
+/// error type (a new variant anywhere fails to compile here).
+fn grade_failure(e: &PipelineError) -> GradeFailure {
+    use GradeFailure::{Internal, OnThisBody, Template};
+    let profile = |p: &ProfileError, slug: &'static str| match p {
+        // geometry of this body: the profile's points collapse or run off
+        ProfileError::NonFinitePoint { .. }
+        | ProfileError::ZeroChord { .. }
+        | ProfileError::ChordOverflow { .. }
+        | ProfileError::ZeroNodeChord { .. }
+        | ProfileError::NonFiniteNode { .. } => OnThisBody(slug),
+        // the stored profile itself
+        ProfileError::TooFewPoints { .. }
+        | ProfileError::StoredLength { .. }
+        | ProfileError::StoredIncomplete
+        | ProfileError::StoredParam { .. }
+        | ProfileError::NonFiniteTangent { .. } => Template,
+    };
+    match e {
+        PipelineError::Decode(c) => match c {
+            CodecError::MissingPoint { .. } | CodecError::SingularFrame { .. } => OnThisBody("template-does-not-fit"),
+            CodecError::Profile { source, .. } => profile(source, "template-does-not-fit"),
+            // the draft of a validated template, and a stored template that no longer validates
+            CodecError::Draft(_) | CodecError::Template(_) => Internal,
+        },
+        PipelineError::Refine(r) => match r {
+            RefineError::Profile { .. } => OnThisBody("refine-failed"),
+            // the decoded mesh of a validated template: our fault when it is not a mesh
+            RefineError::NonManifoldEdge { .. }
+            | RefineError::InconsistentOrientation { .. }
+            | RefineError::IndexOutOfRange { .. }
+            | RefineError::DegenerateFace { .. }
+            | RefineError::NonFinitePosition { .. }
+            | RefineError::FixedFlags { .. }
+            | RefineError::EdgeTable { .. }
+            | RefineError::ProfileOnMissingEdge { .. }
+            | RefineError::TooLarge { .. } => Internal,
+        },
+        PipelineError::Clear(ClearError::Profile { source, .. }) => profile(source, "garment-cannot-clear-body"),
+        PipelineError::Pattern(p) => match p {
+            PatternError::Panel(panel) => match panel {
+                PanelError::NotADisc { .. }
+                | PanelError::SeamOffOutline { .. }
+                | PanelError::SeamNotChained { .. }
+                | PanelError::BadDart { .. }
+                | PanelError::UnknownPanel { .. } => Template,
+                PanelError::FaceCount { .. } => Internal,
+            },
+            PatternError::Flatten { source, .. } => match source {
+                FlattenError::NonFinite { .. } | FlattenError::DegenerateTriangle { .. } => {
+                    OnThisBody("pattern-failed")
+                }
+                // the cut panels are ours: a panel that is not a disc mesh, bad options, numerics
+                FlattenError::Empty
+                | FlattenError::IndexOutOfRange { .. }
+                | FlattenError::NonManifoldEdge { .. }
+                | FlattenError::InconsistentOrientation { .. }
+                | FlattenError::NonManifoldVertex { .. }
+                | FlattenError::Disconnected { .. }
+                | FlattenError::NotADisc { .. }
+                | FlattenError::SeamVertex { .. }
+                | FlattenError::SewnRatio { .. }
+                | FlattenError::InvalidOption { .. }
+                | FlattenError::Factorisation(_) => Internal,
+            },
+            PatternError::Piece(piece) => match piece {
+                PieceError::GrainOffPanel { .. } => Template,
+                PieceError::DegenerateGrain { .. } => OnThisBody("pattern-failed"),
+                PieceError::UvCount { .. } => Internal,
+            },
+            // a run's plan comes from the same refinement of the same template
+            PatternError::CarriedDart { .. } => Internal,
+        },
+        // the service's own configuration
+        PipelineError::ShadowedOption { .. } => Internal,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grade(source: PipelineError) -> Problem {
+        Problem::from(WorkError::Grade { template: "trousers".into(), size: "8".into(), source })
+    }
+
+    #[test]
+    fn an_internal_fault_of_a_grade_is_a_bare_500_and_a_body_it_cannot_follow_a_422() {
+        // regression (issue #16): every pipeline error left as a 422 with its text, internal
+        // faults included (here: the refinement's own edge table)
+        let p = grade(PipelineError::Refine(RefineError::EdgeTable { edges: 12, profiles: 11 }));
+        assert_eq!(p.status, 500);
+        assert!(!p.detail.contains("profile") && !p.detail.contains("12"), "{}", p.detail);
+        let p = grade(PipelineError::Pattern(PatternError::Flatten {
+            panel: "front".into(),
+            source: FlattenError::Factorisation("not positive definite".into()),
+        }));
+        assert_eq!(p.status, 500);
+        assert!(!p.detail.contains("definite"), "{}", p.detail);
+        let p = grade(PipelineError::ShadowedOption { nested: "refine.levels", top: "levels" });
+        assert_eq!(p.status, 500);
+        // the body: 422 naming what does not fit
+        let p =
+            grade(PipelineError::Clear(ClearError::Profile { edge: 3, source: ProfileError::ZeroChord { index: 2 } }));
+        assert_eq!((p.status, p.kind.as_str()), (422, "/problems/garment-cannot-clear-body"));
+        assert!(p.detail.contains("edge 3"), "{}", p.detail);
+        // the template's own structure: 422, the same on every body
+        let p = grade(PipelineError::Pattern(PatternError::Panel(PanelError::UnknownPanel {
+            seam: "side".into(),
+            panel: "nope".into(),
+        })));
+        assert_eq!((p.status, p.kind.as_str()), (422, "/problems/template-cannot-be-graded"));
+        assert_eq!(p.field.as_deref(), Some("templates"));
     }
 }

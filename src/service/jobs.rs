@@ -113,6 +113,11 @@ pub struct JobRecord {
     /// Wall time per stage, ms (not part of the artefacts).
     #[serde(default)]
     pub timings_ms: std::collections::BTreeMap<String, f64>,
+    /// Units of progress: the chart's sizes or the bodies, fixed at
+    /// submission (issue #16: a finished job's total read 1, not 12).
+    /// 0 in records stored before it was kept.
+    #[serde(default)]
+    pub units: usize,
 }
 
 /// The job database.
@@ -220,6 +225,7 @@ mod tests {
             created: None,
         };
         let mut r = JobRecord {
+            units: 1,
             id: "abc".into(),
             spec,
             versions: vec![("straight-skirt".into(), 1)],

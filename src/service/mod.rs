@@ -108,10 +108,11 @@ pub struct ServiceConfig {
     /// Jobs queued or running before 503.
     #[arg(long, env = "GRADE3D_MAX_PENDING_JOBS", default_value_t = 64)]
     pub max_pending_jobs: usize,
-    /// Time limit of a synchronous request, seconds.
-    #[arg(long, env = "GRADE3D_REQUEST_TIMEOUT_S", default_value_t = 120)]
-    pub request_timeout_s: u64,
-    /// How long the results of a scan are kept, seconds.
+    /// Time limit of a synchronous request, seconds (fractions allowed; > 0).
+    #[arg(long, env = "GRADE3D_REQUEST_TIMEOUT_S", default_value_t = 120.0, value_parser = positive_seconds)]
+    pub request_timeout_s: f64,
+    /// How long the results of a scan are kept, seconds (0: not past the
+    /// response that carries them).
     #[arg(long, env = "GRADE3D_SCAN_TTL_S", default_value_t = 600)]
     pub scan_ttl_s: u64,
     /// Memory for cached results, bytes.
@@ -122,7 +123,20 @@ pub struct ServiceConfig {
     pub no_gpu: bool,
 }
 
+/// A time limit in seconds: finite and above 0.
+fn positive_seconds(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 && v <= 1e9 => Ok(v),
+        _ => Err(format!("`{text}` is not a number of seconds above 0")),
+    }
+}
+
 impl ServiceConfig {
+    /// The time limit of a synchronous request.
+    pub fn request_timeout(&self) -> Duration {
+        Duration::try_from_secs_f64(self.request_timeout_s).unwrap_or(Duration::from_secs(120))
+    }
+
     /// The defaults of `grade3d serve` with `data_dir`.
     pub fn with_data_dir(data_dir: PathBuf) -> Self {
         use clap::Parser;
@@ -156,6 +170,10 @@ pub struct Inner {
     pub pool: WorkPool,
     /// Metrics.
     pub metrics: Metrics,
+    /// Jobs queued or running (admission: [`ServiceConfig::max_pending_jobs`];
+    /// issue #16: it read the Prometheus gauges, and two submissions could
+    /// both pass the check).
+    pending_jobs: std::sync::atomic::AtomicUsize,
     /// Job progress (stage, done, total) of running jobs, in memory.
     pub progress: std::sync::Mutex<std::collections::HashMap<String, (String, usize, usize)>>,
     /// The job worker's queue.
@@ -194,6 +212,7 @@ impl AppState {
             obstacles: Arc::new(ObstacleCache::new(ObstacleCacheOptions::default())),
             pool,
             metrics: Metrics::new(),
+            pending_jobs: Default::default(),
             progress: Default::default(),
             job_tx,
             job_rx: std::sync::Mutex::new(Some(job_rx)),
@@ -202,6 +221,7 @@ impl AppState {
         for r in state.0.jobs.all().map_err(|e| e.to_string())? {
             state.0.metrics.jobs.with_label_values(&[r.state.as_str()]).inc();
             if matches!(r.state, JobState::Queued | JobState::Running) {
+                state.0.pending_jobs.fetch_add(1, std::sync::atomic::Ordering::AcqRel);
                 let _ = state.0.job_tx.send(r.id);
             }
         }
@@ -303,7 +323,16 @@ pub fn app(state: AppState) -> Router {
             tracing::error!("handler panicked");
             Problem::internal().into_response()
         }))
-        .layer(tower_http::trace::TraceLayer::new_for_http())
+        // one line per request at INFO (method, path, status, latency), in the request's span
+        .layer(
+            tower_http::trace::TraceLayer::new_for_http()
+                .make_span_with(tower_http::trace::DefaultMakeSpan::new().level(tracing::Level::INFO))
+                .on_response(
+                    tower_http::trace::DefaultOnResponse::new()
+                        .level(tracing::Level::INFO)
+                        .latency_unit(tower_http::LatencyUnit::Millis),
+                ),
+        )
         .with_state(state)
 }
 
@@ -322,7 +351,8 @@ async fn observe(State(s): State<AppState>, req: Request, next: Next) -> Respons
 
 async fn readyz(State(s): State<AppState>) -> Result<Json<serde_json::Value>, Problem> {
     let gpu = s.0.gpu.get().ok_or_else(not_ready)?;
-    let templates = s.0.store.list()?.len();
+    let me = s.clone();
+    let templates = off_executor(move || Ok(me.0.store.list()?.len())).await?;
     Ok(Json(serde_json::json!({
         "ready": true,
         "templates": templates,
@@ -415,8 +445,34 @@ fn valid_name(name: &str) -> Result<(), Problem> {
     }
 }
 
-/// The live templates named, in order (at most `max_templates`).
-fn resolve_templates(s: &AppState, names: &[String], field: &str) -> Result<Vec<(u32, String, Template)>, Problem> {
+/// Runs `f` (a call into the redb stores: reads, and writes that fsync; a
+/// template's parse and schema check) on tokio's blocking threads within
+/// the request's tracing span, so that no executor thread waits on the disk
+/// (issue #16: they ran on the executor). Not the work pool: a template
+/// read is never refused because grades fill its queue.
+async fn off_executor<T: Send + 'static>(
+    f: impl FnOnce() -> Result<T, Problem> + Send + 'static,
+) -> Result<T, Problem> {
+    let span = tracing::Span::current();
+    tokio::task::spawn_blocking(move || span.in_scope(f)).await.map_err(|e| {
+        tracing::error!(error = %e, "store call panicked");
+        Problem::internal()
+    })?
+}
+
+/// The live templates named, in order (at most `max_templates`), read off
+/// the executor.
+async fn resolve_templates(
+    s: &AppState,
+    names: &[String],
+    field: &str,
+) -> Result<Vec<(u32, String, Template)>, Problem> {
+    let (me, names, field) = (s.clone(), names.to_vec(), field.to_owned());
+    off_executor(move || resolve_templates_now(&me, &names, &field)).await
+}
+
+/// [`resolve_templates`] on the calling thread.
+fn resolve_templates_now(s: &AppState, names: &[String], field: &str) -> Result<Vec<(u32, String, Template)>, Problem> {
     if names.is_empty() {
         return Err(Problem::bad_request("no-templates", "name at least one template").field(field));
     }
@@ -448,7 +504,7 @@ fn resolve_templates(s: &AppState, names: &[String], field: &str) -> Result<Vec<
 
 async fn list_templates(State(s): State<AppState>, headers: HeaderMap) -> Result<Json<Vec<store::Entry>>, Problem> {
     check_key(&s, &headers, false)?;
-    Ok(Json(s.0.store.list()?))
+    Ok(Json(off_executor(move || Ok(s.0.store.list()?)).await?))
 }
 
 #[derive(Debug, Deserialize)]
@@ -465,7 +521,8 @@ async fn get_template(
 ) -> Result<Response, Problem> {
     check_key(&s, &headers, false)?;
     let Query(q) = q.map_err(|e| Problem::bad_request("invalid-query", e.body_text()).field("version"))?;
-    let (version, json) = s.0.store.get_json(&name, q.version)?;
+    let me = s.clone();
+    let (version, json) = off_executor(move || Ok(me.0.store.get_json(&name, q.version)?)).await?;
     let mut resp = ([(header::CONTENT_TYPE, "application/json")], json).into_response();
     if let Ok(v) = HeaderValue::from_str(&version.to_string()) {
         resp.headers_mut().insert("x-template-version", v);
@@ -483,7 +540,7 @@ async fn create_template(
     check_key(&s, &headers, true)?;
     let text = utf8(bytes)?;
     let me = s.clone();
-    let limit = Duration::from_secs(s.0.cfg.request_timeout_s);
+    let limit = s.0.cfg.request_timeout();
     let entry = s.0.pool.run(limit, move || me.0.store.put(None, &text, true)).await??;
     let location = format!("/v1/templates/{}", entry.name);
     Ok((StatusCode::CREATED, [(header::LOCATION, location)], Json(entry)).into_response())
@@ -500,7 +557,7 @@ async fn replace_template(
     valid_name(&name)?;
     let text = utf8(bytes)?;
     let me = s.clone();
-    let limit = Duration::from_secs(s.0.cfg.request_timeout_s);
+    let limit = s.0.cfg.request_timeout();
     Ok(Json(s.0.pool.run(limit, move || me.0.store.put(Some(&name), &text, false)).await??))
 }
 
@@ -510,7 +567,7 @@ async fn delete_template(
     Path(name): Path<String>,
 ) -> Result<StatusCode, Problem> {
     check_key(&s, &headers, true)?;
-    s.0.store.delete(&name)?;
+    off_executor(move || Ok(s.0.store.delete(&name)?)).await?;
     Ok(StatusCode::NO_CONTENT)
 }
 
@@ -566,7 +623,7 @@ async fn run_flow(
     }
     s.0.metrics.cache.with_label_values(&["results", "miss"]).inc();
     let ctx = s.work_context()?;
-    let limit = Duration::from_secs(s.0.cfg.request_timeout_s);
+    let limit = s.0.cfg.request_timeout();
     let outcome = s.0.pool.run(limit, move || f(&ctx)).await??;
     s.0.metrics.observe_stages(&outcome.timings);
     let expires = ttl.map(|t| Instant::now() + t);
@@ -666,10 +723,10 @@ async fn grade_size_chart(
         return Err(unsupported_media("application/json or text/csv"));
     };
     let field = "templates";
-    let templates = resolve_templates(&s, &req.templates, field)?;
+    let templates = resolve_templates(&s, &req.templates, field).await?;
     let chart = parse_chart(&s, &req.chart, req.figure)?;
     let created = parse_created(req.created.as_deref())?;
-    let canonical = serde_json::to_vec(&chart).unwrap_or_default();
+    let canonical = canonical_json("size chart", &chart)?;
     let stamp = created.map(|c| c.to_rfc3339()).unwrap_or_default();
     let mut parts: Vec<&[u8]> =
         vec![b"size-chart", &canonical, req.base_size.as_deref().unwrap_or("").as_bytes(), stamp.as_bytes()];
@@ -746,7 +803,7 @@ async fn grade_scan(State(s): State<AppState>, headers: HeaderMap, req: Request)
         .ok_or_else(|| Problem::bad_request("missing-part", "the `landmarks` part is missing").field("landmarks"))?;
     let landmarks = String::from_utf8(landmarks.to_vec())
         .map_err(|_| Problem::bad_request("not-utf8", "the landmarks are not UTF-8 JSON").field("landmarks"))?;
-    let templates = resolve_templates(&s, &templates, "template")?;
+    let templates = resolve_templates(&s, &templates, "template").await?;
     let mut parts: Vec<&[u8]> = vec![b"scan", &scan, landmarks.as_bytes()];
     parts.extend(templates.iter().map(|(_, json, _)| json.as_bytes()));
     let id = content_id(&parts);
@@ -805,11 +862,13 @@ async fn get_result_artefact(
 fn job_view(s: &AppState, r: &JobRecord) -> serde_json::Value {
     let base = format!("/v1/jobs/{}", r.id);
     let progress = s.0.progress.lock().unwrap_or_else(|p| p.into_inner()).get(&r.id).cloned();
+    let units = r.units.max(1);
     let (stage, done, total) = match (r.state, progress) {
-        (JobState::Done, _) => ("done".to_owned(), 1, 1),
-        (JobState::Failed, _) => ("failed".to_owned(), 0, 1),
+        (JobState::Done, _) => ("done".to_owned(), units, units),
+        (JobState::Failed, _) => ("failed".to_owned(), 0, units),
         (_, Some(p)) => p,
-        (_, None) => ("queued".to_owned(), 0, r.spec.bodies.len().max(1)),
+        (JobState::Running, None) => ("running".to_owned(), 0, units),
+        (_, None) => ("queued".to_owned(), 0, units),
     };
     serde_json::json!({
         "id": r.id,
@@ -836,8 +895,8 @@ async fn submit_job(
     let bytes = body_bytes(&s, &headers, body).await?;
     let spec: JobSpec = parse_json_body(&bytes)?;
     parse_created(spec.created.as_deref())?;
-    let templates = resolve_templates(&s, &spec.templates, "templates")?;
-    match (&spec.size_chart, spec.bodies.is_empty()) {
+    let templates = resolve_templates(&s, &spec.templates, "templates").await?;
+    let units = match (&spec.size_chart, spec.bodies.is_empty()) {
         (Some(chart), true) => {
             let chart = parse_chart(&s, chart, None)?;
             if let Some(b) = &spec.base_size {
@@ -846,6 +905,7 @@ async fn submit_job(
                         .field("base_size"));
                 }
             }
+            chart.rows.len()
         }
         (None, false) => {
             if spec.bodies.len() > s.0.cfg.max_job_bodies {
@@ -865,30 +925,29 @@ async fn submit_job(
                     Problem::bad_request("invalid-base64", e.to_string()).field(format!("bodies[{i}].glb_base64"))
                 })?;
             }
+            spec.bodies.len()
         }
         _ => {
             return Err(
                 Problem::bad_request("job-input", "give exactly one of `size_chart` and `bodies`").field("size_chart")
             )
         }
-    }
-    let canonical = serde_json::to_vec(&spec).unwrap_or_default();
+    };
+    let canonical = canonical_json("job", &spec)?;
     let mut parts: Vec<&[u8]> = vec![b"job", &canonical];
     parts.extend(templates.iter().map(|(_, json, _)| json.as_bytes()));
     let id = content_id(&parts);
     let location = format!("/v1/jobs/{id}");
-    if let Some(existing) = s.0.jobs.get(&id)? {
+    let (me, key) = (s.clone(), id.clone());
+    if let Some(existing) = off_executor(move || Ok(me.0.jobs.get(&key)?)).await? {
         if existing.state != JobState::Failed {
             return Ok(
                 (StatusCode::ACCEPTED, [(header::LOCATION, location)], Json(job_view(&s, &existing))).into_response()
             );
         }
     }
-    let pending =
-        s.0.metrics.jobs.with_label_values(&["queued"]).get() + s.0.metrics.jobs.with_label_values(&["running"]).get();
-    if pending >= s.0.cfg.max_pending_jobs as i64 {
-        return Err(Problem::busy(30));
-    }
+    // a slot reserved before the record is written: two submissions cannot both take the last one
+    let slot = JobSlot::reserve(&s).ok_or_else(|| Problem::busy(30))?;
     let record = JobRecord {
         id: id.clone(),
         spec,
@@ -898,11 +957,48 @@ async fn submit_job(
         artefacts: vec![],
         report: None,
         timings_ms: Default::default(),
+        units,
     };
-    s.0.jobs.put(&record)?;
+    let (me, stored) = (s.clone(), record.clone());
+    off_executor(move || Ok(me.0.jobs.put(&stored)?)).await?;
+    slot.keep();
     s.0.metrics.jobs.with_label_values(&["queued"]).inc();
     let _ = s.0.job_tx.send(id);
     Ok((StatusCode::ACCEPTED, [(header::LOCATION, location)], Json(job_view(&s, &record))).into_response())
+}
+
+/// The bytes a result's content address is taken of. One that does not
+/// serialise is a 500 (issue #16: every such input hashed as the empty
+/// string, and so shared one address).
+fn canonical_json(what: &str, value: &impl Serialize) -> Result<Vec<u8>, Problem> {
+    Ok(work::json_bytes(what, value, false)?)
+}
+
+/// A reserved place among [`ServiceConfig::max_pending_jobs`]: given back
+/// when dropped unless kept (the job's end gives it back then).
+struct JobSlot<'a>(Option<&'a AppState>);
+
+impl<'a> JobSlot<'a> {
+    fn reserve(s: &'a AppState) -> Option<Self> {
+        use std::sync::atomic::Ordering;
+        if s.0.pending_jobs.fetch_add(1, Ordering::AcqRel) >= s.0.cfg.max_pending_jobs {
+            s.0.pending_jobs.fetch_sub(1, Ordering::AcqRel);
+            return None;
+        }
+        Some(Self(Some(s)))
+    }
+
+    fn keep(mut self) {
+        self.0 = None;
+    }
+}
+
+impl Drop for JobSlot<'_> {
+    fn drop(&mut self) {
+        if let Some(s) = self.0 {
+            s.0.pending_jobs.fetch_sub(1, std::sync::atomic::Ordering::AcqRel);
+        }
+    }
 }
 
 /// Runs one job to its end on the calling (blocking) thread.
@@ -914,11 +1010,20 @@ fn run_job(s: &AppState, id: &str) {
     let m = &s.0.metrics;
     m.jobs.with_label_values(&[r.state.as_str()]).dec();
     m.jobs.with_label_values(&["running"]).inc();
+    // what a poll reads from now on (issue #16: the record said `queued` until the end)
+    r.state = JobState::Running;
+    if let Err(e) = s.0.jobs.put(&r) {
+        tracing::error!(error = %e, "job state could not be stored");
+    }
     // wait for the GPU start-up to end
     while s.0.gpu.get().is_none() {
         std::thread::sleep(Duration::from_millis(50));
     }
-    let result = run_job_work(s, &r);
+    // a panic ends the job as failed (its place given back), not as `running` for ever
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run_job_work(s, &r))).unwrap_or_else(|_| {
+        tracing::error!("job panicked");
+        Err(Problem::internal())
+    });
     m.jobs.with_label_values(&["running"]).dec();
     let mut stored = Vec::new();
     match result {
@@ -950,6 +1055,7 @@ fn run_job(s: &AppState, id: &str) {
         tracing::error!(error = %e, "job result could not be stored");
     }
     s.0.progress.lock().unwrap_or_else(|p| p.into_inner()).remove(id);
+    s.0.pending_jobs.fetch_sub(1, std::sync::atomic::Ordering::AcqRel);
 }
 
 fn run_job_work(s: &AppState, r: &JobRecord) -> Result<Outcome, Problem> {
@@ -982,13 +1088,15 @@ fn run_job_work(s: &AppState, r: &JobRecord) -> Result<Outcome, Problem> {
     Ok(outcome)
 }
 
-fn job(s: &AppState, id: &str) -> Result<JobRecord, Problem> {
-    s.0.jobs.get(id)?.ok_or_else(|| Problem::not_found(format!("no job `{id}`")))
+/// The job `id`, read off the executor.
+async fn job(s: &AppState, id: &str) -> Result<JobRecord, Problem> {
+    let (me, key) = (s.clone(), id.to_owned());
+    off_executor(move || Ok(me.0.jobs.get(&key)?)).await?.ok_or_else(|| Problem::not_found(format!("no job `{id}`")))
 }
 
 async fn get_job(State(s): State<AppState>, headers: HeaderMap, Path(id): Path<String>) -> Result<Response, Problem> {
     check_key(&s, &headers, false)?;
-    let r = job(&s, &id)?;
+    let r = job(&s, &id).await?;
     Ok(Json(job_view(&s, &r)).into_response())
 }
 
@@ -998,13 +1106,16 @@ async fn get_job_artefact(
     Path((id, name)): Path<(String, String)>,
 ) -> Result<Response, Problem> {
     check_key(&s, &headers, false)?;
-    let r = job(&s, &id)?;
+    let r = job(&s, &id).await?;
     let entry = r
         .artefacts
         .iter()
         .find(|a| a.name == name)
         .ok_or_else(|| Problem::not_found(format!("job `{id}` has no artefact `{name}`")).field("artefact"))?;
-    let bytes = s.0.jobs.artefact(&id, &name)?.ok_or_else(|| Problem::not_found("artefact missing"))?;
+    let (me, key, file) = (s.clone(), id.clone(), entry.name.clone());
+    let bytes = off_executor(move || Ok(me.0.jobs.artefact(&key, &file)?))
+        .await?
+        .ok_or_else(|| Problem::not_found("artefact missing"))?;
     Ok(artefact_response(&entry.name, &entry.media_type, bytes))
 }
 
@@ -1043,6 +1154,73 @@ mod tests {
         let resp = app(s).oneshot(Request::get("/readyz").body(Body::empty()).unwrap()).await.unwrap();
         assert_eq!(resp.status(), StatusCode::SERVICE_UNAVAILABLE);
         let _ = std::fs::remove_dir_all(dir);
+    }
+
+    #[test]
+    fn a_running_job_reads_running_and_a_finished_one_keeps_its_total() {
+        // regression (issue #16): the record read `queued` while the job ran, and a finished
+        // job's progress read 1 of 1 after 12 of 12
+        let (s, dir) = state();
+        let spec = JobSpec { templates: vec![], size_chart: None, bodies: vec![], base_size: None, created: None };
+        let mut r = JobRecord {
+            id: "j".into(),
+            spec,
+            versions: vec![],
+            state: JobState::Running,
+            error: None,
+            artefacts: vec![],
+            report: None,
+            timings_ms: Default::default(),
+            units: 12,
+        };
+        let v = job_view(&s, &r);
+        assert_eq!((v["state"].as_str(), v["progress"]["total"].as_u64()), (Some("running"), Some(12)), "{v}");
+        r.state = JobState::Done;
+        let v = job_view(&s, &r);
+        assert_eq!((v["progress"]["done"].as_u64(), v["progress"]["total"].as_u64()), (Some(12), Some(12)), "{v}");
+        let _ = std::fs::remove_dir_all(dir);
+    }
+
+    #[test]
+    fn job_slots_are_bounded_reserved_at_once_and_given_back() {
+        // regression (issue #16): admission read the Prometheus gauges, after the check and
+        // before the record, so two submissions could both take the last place
+        let dir = std::env::temp_dir().join(format!("grade3d-svc-slots-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let mut cfg = ServiceConfig::with_data_dir(dir.clone());
+        cfg.max_pending_jobs = 2;
+        let s = AppState::open(cfg).unwrap();
+        let a = JobSlot::reserve(&s).expect("first");
+        let b = JobSlot::reserve(&s).expect("second");
+        assert!(JobSlot::reserve(&s).is_none(), "a third place");
+        drop(b);
+        JobSlot::reserve(&s).expect("given back when dropped").keep();
+        a.keep();
+        assert!(JobSlot::reserve(&s).is_none(), "kept places stay taken");
+        assert_eq!(s.0.pending_jobs.load(std::sync::atomic::Ordering::Acquire), 2);
+        let _ = std::fs::remove_dir_all(dir);
+    }
+
+    #[tokio::test(flavor = "current_thread")]
+    async fn store_calls_run_off_the_executor_thread() {
+        // regression (issue #16): redb reads and fsync'd writes ran on the async executor
+        let executor = std::thread::current().id();
+        let on = off_executor(|| Ok(std::thread::current().id())).await.unwrap();
+        assert_ne!(on, executor);
+        let (s, dir) = state();
+        let resp = app(s).oneshot(Request::get("/v1/templates").body(Body::empty()).unwrap()).await.unwrap();
+        assert_eq!(resp.status(), StatusCode::OK);
+        let _ = std::fs::remove_dir_all(dir);
+    }
+
+    #[test]
+    fn the_default_address_is_loopback_8080() {
+        // the README's first command serves here (its end-to-end test runs on a free port)
+        let c = ServiceConfig::with_data_dir(PathBuf::from("d"));
+        assert_eq!(c.addr, "127.0.0.1:8080".parse().unwrap());
+        assert_eq!(c.request_timeout(), Duration::from_secs(120));
+        assert!(positive_seconds("0").is_err() && positive_seconds("nan").is_err() && positive_seconds("-1").is_err());
+        assert_eq!(positive_seconds("0.001"), Ok(0.001));
     }
 
     #[tokio::test]

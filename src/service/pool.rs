@@ -91,7 +91,7 @@ impl WorkPool {
         };
         match tokio::time::timeout(limit, work.in_current_span()).await {
             Ok(r) => r,
-            Err(_) => Err(Problem::timeout(limit.as_secs().max(1), self.opts.retry_after_s)),
+            Err(_) => Err(Problem::timeout(limit, self.opts.retry_after_s)),
         }
     }
 }

@@ -10,6 +10,9 @@ use serde::{Deserialize, Serialize};
 /// Media type of problem documents.
 pub const PROBLEM_JSON: &str = "application/problem+json";
 
+/// The body of [`Problem::internal`], for when a problem cannot be serialised.
+const INTERNAL_BODY: &[u8] = br#"{"type":"/problems/internal","title":"Internal error","status":500,"detail":"the request could not be completed"}"#;
+
 /// A problem document (RFC 9457 §3.1), with two extension members.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Problem {
@@ -74,12 +77,15 @@ impl Problem {
     }
 
     /// 503 when work outlived the request's time limit.
-    pub fn timeout(limit_s: u64, retry_after_s: u64) -> Self {
+    pub fn timeout(limit: std::time::Duration, retry_after_s: u64) -> Self {
         let mut p = Self::new(
             StatusCode::SERVICE_UNAVAILABLE,
             "timeout",
             "Time limit exceeded",
-            format!("the work did not finish within the {limit_s} s time limit; retry later or submit a batch job"),
+            format!(
+                "the work did not finish within the {} s time limit; retry later or submit a batch job",
+                limit.as_secs_f64()
+            ),
         );
         p.retry_after_s = Some(retry_after_s);
         p
@@ -98,9 +104,14 @@ impl Problem {
 
 impl IntoResponse for Problem {
     fn into_response(self) -> Response {
-        let status = StatusCode::from_u16(self.status).unwrap_or(StatusCode::INTERNAL_SERVER_ERROR);
+        let mut status = StatusCode::from_u16(self.status).unwrap_or(StatusCode::INTERNAL_SERVER_ERROR);
         let retry = self.retry_after_s;
-        let body = serde_json::to_vec(&self).unwrap_or_default();
+        // a problem is plain strings and numbers; should it not serialise, a fixed 500, never an empty body
+        let body = serde_json::to_vec(&self).unwrap_or_else(|e| {
+            tracing::error!(error = %e, "problem document did not serialise");
+            status = StatusCode::INTERNAL_SERVER_ERROR;
+            INTERNAL_BODY.to_vec()
+        });
         let mut resp = (status, body).into_response();
         resp.headers_mut().insert(header::CONTENT_TYPE, HeaderValue::from_static(PROBLEM_JSON));
         if let Some(s) = retry {

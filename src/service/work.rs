@@ -130,6 +130,25 @@ pub enum WorkError {
     /// Writing the garment GLB failed.
     #[error("garment GLB: {0}")]
     GarmentGlb(GltfError),
+    /// A JSON artefact did not serialise (internal; issue #16: it was
+    /// written as an empty artefact).
+    #[error("{what} did not serialise: {source}")]
+    Serialise {
+        /// The artefact.
+        what: String,
+        /// Why.
+        source: serde_json::Error,
+    },
+}
+
+/// `value` as JSON (`pretty`: indented); one that does not serialise is a
+/// [`WorkError::Serialise`] naming `what`, never an empty artefact.
+///
+/// # Errors
+/// [`WorkError::Serialise`].
+pub fn json_bytes(what: &str, value: &impl Serialize, pretty: bool) -> Result<Vec<u8>, WorkError> {
+    let bytes = if pretty { serde_json::to_vec_pretty(value) } else { serde_json::to_vec(value) };
+    bytes.map_err(|source| WorkError::Serialise { what: what.to_owned(), source })
 }
 
 /// One downloadable result.
@@ -432,7 +451,7 @@ fn pattern_artefacts(template: &str, size: &str, g: &Graded) -> Result<Vec<Artef
         Artefact {
             name: format!("{stem}.pattern.json"),
             media_type: "application/json",
-            bytes: serde_json::to_vec(&g.pattern).unwrap_or_default(),
+            bytes: json_bytes(&format!("{stem}.pattern.json"), &g.pattern, false)?,
         },
     ])
 }
@@ -626,10 +645,10 @@ fn graded_nests(
     Ok(())
 }
 
-fn finish(report: serde_json::Value, mut artefacts: Vec<Artefact>, timer: Timer) -> Outcome {
-    let bytes = serde_json::to_vec_pretty(&report).unwrap_or_default();
+fn finish(report: serde_json::Value, mut artefacts: Vec<Artefact>, timer: Timer) -> Result<Outcome, WorkError> {
+    let bytes = json_bytes("report.json", &report, true)?;
     artefacts.push(Artefact { name: "report.json".into(), media_type: "application/json", bytes });
-    Outcome { report, artefacts, timings: timer.0 }
+    Ok(Outcome { report, artefacts, timings: timer.0 })
 }
 
 /// The size-chart flow (module docs). `base` is the grade rules' base size
@@ -742,7 +761,7 @@ pub fn size_chart(
         "nest_truing": truing.into_iter().collect::<BTreeMap<_, _>>(),
         "sizes": sizes,
     });
-    Ok(finish(report, artefacts, timer))
+    finish(report, artefacts, timer)
 }
 
 /// Grades every template on every body (scans); with more than one body the
@@ -823,7 +842,7 @@ pub fn bodies(
         "collision_checked": ctx.gpu.is_some(),
         "bodies": reports,
     });
-    Ok(finish(report, artefacts, timer))
+    finish(report, artefacts, timer)
 }
 
 /// The scan flow: one body, one or more templates.
@@ -832,4 +851,22 @@ pub fn bodies(
 /// [`WorkError`].
 pub fn scan(ctx: &WorkContext, templates: &[Template], input: &BodyInput<'_>) -> Result<Outcome, WorkError> {
     bodies(ctx, templates, std::slice::from_ref(input), None, None, &|_, _, _| {})
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_json_artefact_that_does_not_serialise_is_an_internal_error_not_an_empty_file() {
+        // regression (issue #16): `serde_json::to_vec(..).unwrap_or_default()` wrote an empty
+        // artefact; the literal failing input: a map whose keys are not strings
+        let bad: BTreeMap<(u8, u8), u8> = [((1, 2), 3)].into_iter().collect();
+        let e = json_bytes("x.pattern.json", &bad, false).unwrap_err();
+        assert!(matches!(&e, WorkError::Serialise { what, .. } if what == "x.pattern.json"), "{e}");
+        let p = crate::service::problem::Problem::from(e);
+        assert_eq!(p.status, 500);
+        assert!(!p.detail.contains("key must be a string"), "{}", p.detail);
+        assert_eq!(json_bytes("ok", &serde_json::json!({"a": 1}), false).unwrap(), br#"{"a":1}"#);
+    }
 }
