@@ -34,6 +34,20 @@ fn temp_dir(tag: &str) -> PathBuf {
     d
 }
 
+/// The address a `grade3d serve` child prints on its stdout (piped); the
+/// rest of its stdout is drained on a thread.
+fn listening_address(child: &mut Child) -> String {
+    let mut lines = BufReader::new(child.stdout.take().expect("stdout piped")).lines();
+    let base = loop {
+        let line = lines.next().expect("server printed its address").unwrap();
+        if let Some(a) = line.strip_prefix("listening on ") {
+            break a.trim().to_owned();
+        }
+    };
+    std::thread::spawn(move || for _ in lines {});
+    base
+}
+
 /// A running server; killed on drop.
 struct Server {
     child: Child,
@@ -59,15 +73,7 @@ impl Server {
             cmd.env(k, v);
         }
         let mut child = cmd.spawn().expect("grade3d serve starts");
-        let stdout = child.stdout.take().unwrap();
-        let mut lines = BufReader::new(stdout).lines();
-        let base = loop {
-            let line = lines.next().expect("server printed its address").unwrap();
-            if let Some(a) = line.strip_prefix("listening on ") {
-                break a.trim().to_owned();
-            }
-        };
-        std::thread::spawn(move || for _ in lines {});
+        let base = listening_address(&mut child);
         let s = Server { child, base, data: data.to_owned() };
         s.wait_ready();
         s
@@ -751,14 +757,7 @@ fn readme_curl_examples_work_as_written() {
         .stderr(Stdio::null())
         .spawn()
         .unwrap();
-    let mut lines = BufReader::new(child.stdout.take().unwrap()).lines();
-    let base = loop {
-        let line = lines.next().expect("server printed its address").unwrap();
-        if let Some(a) = line.strip_prefix("listening on ") {
-            break a.trim().to_owned();
-        }
-    };
-    std::thread::spawn(move || for _ in lines {});
+    let base = listening_address(&mut child);
     let start = Instant::now();
     while call("GET", &format!("{base}/readyz"), &[], None).status != 200 {
         assert!(start.elapsed() < Duration::from_secs(60), "server on {base} not ready");
@@ -851,13 +850,7 @@ fn logs_are_plain_text_off_a_terminal_with_a_line_per_request() {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    let mut lines = BufReader::new(child.stdout.take().unwrap()).lines();
-    let base = loop {
-        let line = lines.next().expect("server printed its address").unwrap();
-        if let Some(a) = line.strip_prefix("listening on ") {
-            break a.trim().to_owned();
-        }
-    };
+    let base = listening_address(&mut child);
     assert_eq!(call("GET", &format!("{base}/healthz"), &[], None).status, 200);
     call("GET", &format!("{base}/v1/templates/nope"), &[], None).problem(404, None);
     // the response line is written before the reply is sent; kill and read what was logged
