@@ -1,17 +1,15 @@
 //! grade3d — automated 3D garment grading.
 //!
-//! Pure geometry core (no I/O, no async, no GPU types) with a thin HTTP
-//! shell. Data flow and module map: `ARCHITECTURE.md`. Equations cite the
-//! papers in `../shared/seeds/` (seed 000: Wang, Wang & Yuen 2002,
-//! "Feature based 3D garment design through 2D sketches").
+//! The shell around [`grade3d_core`] (the pure geometry core, re-exported
+//! here module by module so that `grade3d::geom::…` and the like keep
+//! their paths): glTF and landmark input ([`io`]), the wgpu depth-map
+//! renderer and the per-body obstacle cache ([`collide`]), the MakeHuman
+//! data generator ([`makehuman`]) and the HTTP service ([`service`]). Data
+//! flow and module map: `ARCHITECTURE.md`.
 
-pub mod body;
+pub use grade3d_core::{body, geom, mannequin, pattern, pipeline, refine, template};
+
 pub mod collide;
-pub mod geom;
 pub mod io;
-pub mod mannequin;
-pub mod pattern;
-pub mod pipeline;
-pub mod refine;
+pub mod makehuman;
 pub mod service;
-pub mod template;

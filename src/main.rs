@@ -179,7 +179,7 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
     match cli.command {
         Command::Serve(cfg) => serve(cfg)?,
         Command::Data { what: DataCommand::Mannequin { makehuman, out } } => {
-            let data = grade3d::mannequin::data::from_makehuman(&makehuman)?;
+            let data = grade3d::makehuman::from_makehuman(&makehuman)?;
             let bytes = grade3d::mannequin::data::encode(&data);
             std::fs::write(&out, &bytes)?;
             println!(
@@ -204,7 +204,7 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
         Command::Data { what: DataCommand::Garments { makehuman, dir } } => {
             std::fs::create_dir_all(&dir)?;
             for group in ["helper-skirt", "helper-tights"] {
-                let (pos, tris) = grade3d::mannequin::data::obj_group(&makehuman, group)?;
+                let (pos, tris) = grade3d::makehuman::obj_group(&makehuman, group)?;
                 let raw: Vec<[u64; 3]> = tris.iter().map(|t| t.map(u64::from)).collect();
                 let mesh = grade3d::geom::mesh::TriMesh::from_raw(pos, &raw)?;
                 let glb = grade3d::io::gltf::write_glb(&mesh, None, &[], "grade3d fixtures (MakeHuman hm08, CC0)")?;

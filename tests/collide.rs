@@ -14,10 +14,17 @@
 //! `<name>-difference.png` (red: coverage differs, white: depth over the
 //! threshold) are written.
 
+use std::collections::HashMap;
+use std::time::Instant;
+
 use glam::DVec3;
 use grade3d::collide::depth::{DepthMap, View};
 use grade3d::collide::render::{GpuContext, RenderOptions};
 use grade3d::geom::mesh::{FaceId, TriMesh};
+use grade3d::geom::query;
+use grade3d::geom::winding::{WindingOptions, WindingTree};
+use grade3d::io::gltf;
+use grade3d::mannequin::population::SplitMix64;
 
 fn fixtures() -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures")
@@ -163,7 +170,7 @@ fn body_depth_maps_match_the_cpu_reference_on_gl_and_vulkan() {
 
 fn check_body_maps(gpu: &GpuContext) {
     let info = gpu.adapter().clone();
-    let mesh = grade3d::io::gltf::read_mesh(
+    let mesh = gltf::read_mesh(
         &std::fs::read(fixtures().join("bodies/female-average-caucasian.glb")).unwrap(),
         &Default::default(),
     )
@@ -192,4 +199,115 @@ fn check_body_maps(gpu: &GpuContext) {
             assert!(cmp.max_depth_diff_m <= DEPTH_TOLERANCE_M, "{name}: depth difference {} m", cmp.max_depth_diff_m);
         }
     }
+}
+
+/// The winding tree on a real scan (a body with holes: armpits, crotch,
+/// soles): the fast winding number against the exact one, the branch and
+/// bound closest point against the exhaustive search (moved from the
+/// core's unit tests with issue #16: it reads a GLB, which the core does not).
+#[test]
+fn body_fast_and_exact_agree() {
+    let bytes = std::fs::read(fixtures().join("bodies/female-average-caucasian.glb")).unwrap();
+    let body = gltf::read_mesh(&bytes, &Default::default()).unwrap();
+    let bb = body.aabb();
+    let mut rng = SplitMix64(2024);
+    let pts: Vec<DVec3> =
+        (0..2_000).map(|_| bb.min + (bb.max - bb.min) * DVec3::new(rng.unit(), rng.unit(), rng.unit())).collect();
+    let us = |d: std::time::Duration| d.as_secs_f64() * 1e6 / pts.len() as f64;
+
+    let tree = WindingTree::new(&body, &WindingOptions::default());
+    let t0 = Instant::now();
+    let exact: Vec<f64> = pts.iter().map(|&p| tree.winding_number_exact(p)).collect();
+    let t_exact = t0.elapsed();
+    let t0 = Instant::now();
+    let dist: Vec<f64> = pts.iter().map(|&p| tree.closest_point(p).2).collect();
+    let t_closest = t0.elapsed();
+    let inside = exact.iter().filter(|&&w| w >= 0.5).count();
+    let welded = body.welded(1e-7).unwrap();
+    let mut edges: HashMap<(u32, u32), i32> = HashMap::new();
+    for t in welded.triangles() {
+        for k in 0..3 {
+            let (a, b) = (t[k].0, t[(k + 1) % 3].0);
+            *edges.entry((a.min(b), a.max(b))).or_default() += 1;
+        }
+    }
+    let boundary = edges.values().filter(|&&n| n == 1).count();
+    // how far from 0 or 1 the exact w gets more than 1 cm from the skin (the holes)
+    let frac_far = (0..pts.len())
+        .filter(|&i| dist[i] > 1e-2)
+        .map(|i| exact[i].abs().min((1.0 - exact[i]).abs()))
+        .fold(0.0, f64::max);
+    println!(
+        "body: {} faces, {} nodes, {boundary} boundary edges; {inside}/{} sample points inside; \
+         max |w − round(w)| beyond 1 cm = {frac_far:.1e}",
+        tree.face_count(),
+        tree.node_count(),
+        pts.len()
+    );
+    println!("body: per query {:.1} µs exact winding number, {:.2} µs closest point", us(t_exact), us(t_closest));
+    // branch and bound against the exhaustive search, on a subset
+    for (p, d) in pts.iter().zip(&dist).step_by(20) {
+        let brute = query::closest_point(&body, *p);
+        assert!((brute.distance - d).abs() < 1e-12, "{} vs {d}", brute.distance);
+    }
+    assert!(inside > 0 && inside < pts.len());
+
+    for beta in [2.0, 3.0] {
+        let t0 = Instant::now();
+        let tree = WindingTree::new(&body, &WindingOptions { accuracy_beta: beta, ..Default::default() });
+        let build = t0.elapsed();
+        let t0 = Instant::now();
+        let fast: Vec<f64> = pts.iter().map(|&p| tree.winding_number(p)).collect();
+        let t_fast = t0.elapsed();
+        let t0 = Instant::now();
+        let depth: Vec<f64> = pts.iter().map(|&p| tree.signed_depth(p)).collect();
+        let t_depth = t0.elapsed();
+        let (mut max_diff, mut max_diff_far, mut disagree, mut disagree_far) = (0.0f64, 0.0f64, 0, 0);
+        for i in 0..pts.len() {
+            let diff = (fast[i] - exact[i]).abs();
+            max_diff = max_diff.max(diff);
+            if dist[i] > 1e-3 {
+                max_diff_far = max_diff_far.max(diff);
+            }
+            if (fast[i] >= 0.5) != (exact[i] >= 0.5) {
+                disagree += 1;
+                disagree_far += usize::from(dist[i] > 1e-3);
+            }
+            assert_eq!(depth[i].abs(), dist[i]);
+            assert_eq!(depth[i] > 0.0, fast[i] >= 0.5 && dist[i] > 0.0);
+        }
+        println!(
+            "body β = {beta}: build {:.1} ms; max |w_fast − w_exact| = {max_diff:.2e} ({max_diff_far:.2e} beyond 1 mm); \
+             is_inside disagreements {disagree} ({disagree_far} beyond 1 mm)",
+            build.as_secs_f64() * 1e3
+        );
+        println!(
+            "body β = {beta}: per query {:.2} µs fast winding number ({:.0}× faster than exact), {:.2} µs signed depth",
+            us(t_fast),
+            t_exact.as_secs_f64() / t_fast.as_secs_f64(),
+            us(t_depth)
+        );
+        assert_eq!(disagree_far, 0);
+        assert!(max_diff < 1e-2, "β = {beta}: {max_diff}");
+    }
+
+    // garment-like points: skin vertices moved ±1 mm and ±5 mm along their normals
+    let normals = welded.vertex_normals();
+    let (mut near, mut agree, mut as_offset, mut max_diff) = (0, 0, 0, 0.0f64);
+    for (v, (&x, &n)) in welded.positions().iter().zip(&normals).enumerate().step_by(25) {
+        let offset = [-5e-3, -1e-3, 1e-3, 5e-3][v % 4];
+        let p = x + offset * n;
+        let (fast, exact) = (tree.winding_number(p), tree.winding_number_exact(p));
+        near += 1;
+        max_diff = max_diff.max((fast - exact).abs());
+        agree += usize::from((fast >= 0.5) == (exact >= 0.5));
+        as_offset += usize::from(tree.is_inside(p) == (offset < 0.0));
+    }
+    println!(
+        "body, {near} points 1–5 mm off the skin: fast/exact is_inside agree on {agree}, \
+         inside ⇔ moved inward on {as_offset}; max |w_fast − w_exact| = {max_diff:.2e}"
+    );
+    assert_eq!(agree, near);
+    // the misses are 5 mm offsets at lips, nose and toes that cross into another part of the skin
+    assert!(as_offset * 100 >= near * 98, "{as_offset}/{near}");
 }

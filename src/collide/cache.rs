@@ -15,10 +15,8 @@ use std::collections::VecDeque;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 
-use super::depth::DepthMap;
 use super::render::RenderOptions;
 use crate::geom::mesh::TriMesh;
-use crate::geom::winding::WindingTree;
 
 /// Content address of one body under one set of render options.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -48,14 +46,7 @@ impl BodyKey {
     }
 }
 
-/// The body as an obstacle: its depth maps and its exact inside test.
-#[derive(Debug)]
-pub struct Obstacle {
-    /// Depth maps of every view (Eq. 13).
-    pub maps: Vec<DepthMap>,
-    /// Winding-number hierarchy (exact final pass, measurements).
-    pub tree: WindingTree,
-}
+pub use crate::collide::Obstacle;
 
 /// Knobs of the cache.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -151,7 +142,7 @@ impl ObstacleCache {
 mod tests {
     use super::*;
     use crate::geom::mesh::TriMesh;
-    use crate::geom::winding::WindingOptions;
+    use crate::geom::winding::{WindingOptions, WindingTree};
 
     fn obstacle(mesh: &TriMesh) -> Obstacle {
         Obstacle { maps: Vec::new(), tree: WindingTree::new(mesh, &WindingOptions::default()) }

@@ -509,7 +509,7 @@ fn unique_id(used: &mut BTreeSet<String>, base: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pattern::export::test_pieces;
+    use crate::pattern::export::samples;
 
     /// Parses the document and returns it with its root.
     fn parse(svg: &str) -> roxmltree::Document<'_> {
@@ -525,7 +525,7 @@ mod tests {
 
     #[test]
     fn pieces_svg_parses_with_one_group_per_piece() {
-        let pieces = test_pieces::pieces("M", 0.0);
+        let pieces = samples::pieces("M", 0.0);
         let svg = pieces_svg(&pieces, &SvgOptions::default());
         let doc = parse(&svg);
         let root = doc.root_element();
@@ -562,7 +562,7 @@ mod tests {
 
     #[test]
     fn pieces_do_not_overlap_and_are_not_mirrored() {
-        let pieces = test_pieces::pieces("M", 0.0);
+        let pieces = samples::pieces("M", 0.0);
         let svg = pieces_svg(&pieces, &SvgOptions::default());
         let doc = parse(&svg);
         let boxes: Vec<(f64, f64, f64, f64)> = doc
@@ -607,7 +607,7 @@ mod tests {
 
     #[test]
     fn nest_svg_has_a_subgroup_and_colour_per_size() {
-        let nests = test_pieces::nests();
+        let nests = samples::nests();
         let opts = SvgOptions::default();
         let svg = nest_svg("Dress <A&B>", &nests, &opts);
         let doc = parse(&svg);
@@ -633,10 +633,10 @@ mod tests {
 
     #[test]
     fn svg_is_deterministic_and_survives_bad_input() {
-        let nests = test_pieces::nests();
+        let nests = samples::nests();
         let opts = SvgOptions::default();
         assert_eq!(nest_svg("x", &nests, &opts), nest_svg("x", &nests, &opts));
-        let mut bad = test_pieces::pocket("M\u{0}\u{1b}", 0.0);
+        let mut bad = samples::pocket("M\u{0}\u{1b}", 0.0);
         bad.name = "\u{7}bell\u{FFFE}".to_string();
         bad.cut_line[0].x = f64::NAN;
         let svg = pieces_svg(&[bad], &opts);

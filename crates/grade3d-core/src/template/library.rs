@@ -33,9 +33,9 @@ use crate::mannequin::model::{BodyModel, MannequinError, MannequinParams};
 
 /// The built-in template documents, in the repository under `templates/garments/`.
 const BUILTIN: &[(&str, &str)] = &[
-    ("straight-skirt", include_str!("../../templates/garments/straight-skirt.json")),
-    ("trousers", include_str!("../../templates/garments/trousers.json")),
-    ("fitted-bodice", include_str!("../../templates/garments/fitted-bodice.json")),
+    ("straight-skirt", include_str!("../../../../templates/garments/straight-skirt.json")),
+    ("trousers", include_str!("../../../../templates/garments/trousers.json")),
+    ("fitted-bodice", include_str!("../../../../templates/garments/fitted-bodice.json")),
 ];
 
 /// Loads and validates every built-in template.

@@ -405,7 +405,7 @@ pub enum TemplateError {
 }
 
 /// The JSON Schema of the template document.
-pub const SCHEMA_JSON: &str = include_str!("../../templates/schema/garment-template.schema.json");
+pub const SCHEMA_JSON: &str = include_str!("../../../../templates/schema/garment-template.schema.json");
 
 /// Checks a parsed document against [`SCHEMA_JSON`]; the error lists the
 /// first few violations with their JSON pointers.

@@ -34,7 +34,7 @@ use crate::geom::mesh::{MeshError, TriMesh, VertexId};
 /// Metres per decimetre (MakeHuman's unit).
 pub const METRES_PER_DM: f64 = 0.1;
 
-static EMBEDDED: &[u8] = include_bytes!("../../templates/mannequin/hm08.bin.gz");
+static EMBEDDED: &[u8] = include_bytes!("../../../../templates/mannequin/hm08.bin.gz");
 
 /// Macro parameters of the body model, each documented with its range.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

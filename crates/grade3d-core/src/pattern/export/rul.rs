@@ -251,7 +251,7 @@ fn push_row(out: &mut String, fields: &[String]) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pattern::export::test_pieces;
+    use crate::pattern::export::samples;
 
     #[test]
     fn creation_stamps_read_rfc3339_and_epoch_seconds_and_name_bad_ones() {
@@ -275,7 +275,7 @@ mod tests {
 
     #[test]
     fn rul_lists_sizes_and_one_delta_per_size() {
-        let t = test_pieces::rules();
+        let t = samples::rules();
         let rul = rules_rul(&t);
         let lines: Vec<&str> = rul.lines().collect();
         assert_eq!(lines[0], "ASTM/D6673/RUL");
@@ -309,7 +309,7 @@ mod tests {
 
     #[test]
     fn csv_has_a_row_per_rule_and_quotes_what_needs_it() {
-        let mut t = test_pieces::rules();
+        let mut t = samples::rules();
         t.pieces[0].rules[0].label = "waist, \"front\"".to_string();
         let csv = rules_table_csv(&t);
         let lines: Vec<&str> = csv.lines().collect();

@@ -778,7 +778,7 @@ mod tests {
     use dxf::Block;
 
     use super::*;
-    use crate::pattern::export::test_pieces;
+    use crate::pattern::export::samples;
 
     fn ok<T>(r: Result<T, ExportError>) -> T {
         match r {
@@ -794,7 +794,7 @@ mod tests {
 
     #[test]
     fn pieces_round_trip_through_read_outlines() {
-        let pieces = test_pieces::pieces("M", 0.0);
+        let pieces = samples::pieces("M", 0.0);
         let bytes = ok(pieces_dxf("Dress & co", &pieces, &DxfOptions::default()));
         let text = String::from_utf8_lossy(&bytes);
         assert!(text.contains("AC1009"), "R12");
@@ -811,22 +811,22 @@ mod tests {
 
     #[test]
     fn the_gerber_profile_has_an_empty_header_and_no_tables() {
-        let nests = test_pieces::nests();
+        let nests = samples::nests();
         let gerber = DxfOptions { profile: DxfProfile::GerberAccuMark, ..DxfOptions::default() };
-        let bytes = ok(nest_dxf_with_rules("Dress", &nests, &test_pieces::rules(), &gerber));
+        let bytes = ok(nest_dxf_with_rules("Dress", &nests, &samples::rules(), &gerber));
         let text = String::from_utf8(bytes.clone()).expect("ASCII");
         assert!(text.is_ascii());
         assert!(!text.contains("TABLES") && !text.contains("$ACADVER"), "no TABLES, empty HEADER");
         assert!(text.starts_with("  0\r\nSECTION\r\n  2\r\nHEADER\r\n  0\r\nENDSEC\r\n"), "{}", &text[..80]);
         // the same pieces as the AAMA profile, read back
-        let aama = ok(nest_dxf_with_rules("Dress", &nests, &test_pieces::rules(), &DxfOptions::default()));
+        let aama = ok(nest_dxf_with_rules("Dress", &nests, &samples::rules(), &DxfOptions::default()));
         assert_eq!(ok(read_outlines(&bytes)), ok(read_outlines(&aama)));
     }
 
     #[test]
     fn nest_has_a_block_per_size_stacked() {
-        let nests = test_pieces::nests();
-        let bytes = ok(nest_dxf_with_rules("Dress", &nests, &test_pieces::rules(), &DxfOptions::default()));
+        let nests = samples::nests();
+        let bytes = ok(nest_dxf_with_rules("Dress", &nests, &samples::rules(), &DxfOptions::default()));
         let drawing = ok(Drawing::load(&mut &bytes[..]).map_err(|e| ExportError::Dxf(e.to_string())));
         let blocks: Vec<&Block> = drawing.blocks().filter(|b| !b.name.starts_with('*')).collect();
         assert_eq!(blocks.len(), 9);
@@ -869,18 +869,18 @@ mod tests {
 
     #[test]
     fn output_is_deterministic() {
-        let nests = test_pieces::nests();
+        let nests = samples::nests();
         let opts = DxfOptions::default();
         let a = ok(nest_dxf("Dress", &nests, &opts));
         let b = ok(nest_dxf("Dress", &nests, &opts));
         assert_eq!(a, b);
-        let pieces = test_pieces::pieces("S", -8.0);
+        let pieces = samples::pieces("S", -8.0);
         assert_eq!(ok(pieces_dxf("x", &pieces, &opts)), ok(pieces_dxf("x", &pieces, &opts)));
     }
 
     #[test]
     fn notches_are_points_on_the_boundary_pointing_inwards() {
-        let front = test_pieces::front("M", 0.0);
+        let front = samples::front("M", 0.0);
         let bytes = ok(pieces_dxf("x", std::slice::from_ref(&front), &DxfOptions::default()));
         let drawing = ok(Drawing::load(&mut &bytes[..]).map_err(|e| ExportError::Dxf(e.to_string())));
         let block = drawing.blocks().find(|b| !b.name.starts_with('*'));
@@ -905,13 +905,13 @@ mod tests {
 
     #[test]
     fn bad_input_is_an_error() {
-        let mut p = test_pieces::pocket("M", 0.0);
+        let mut p = samples::pocket("M", 0.0);
         p.sew_line[1].y = f64::INFINITY;
         assert!(matches!(
             pieces_dxf("x", &[p], &DxfOptions::default()),
             Err(ExportError::NonFinite { what: "sew line", .. })
         ));
-        let mut p = test_pieces::pocket("M", 0.0);
+        let mut p = samples::pocket("M", 0.0);
         p.cut_line.truncate(2);
         assert!(matches!(
             pieces_dxf("x", &[p], &DxfOptions::default()),
@@ -928,7 +928,7 @@ mod tests {
         let pieces: Vec<PatternPiece> = names
             .iter()
             .map(|n| {
-                let mut p = test_pieces::pocket("M", 0.0);
+                let mut p = samples::pocket("M", 0.0);
                 p.name = n.to_string();
                 p
             })

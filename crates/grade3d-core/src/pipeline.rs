@@ -23,7 +23,7 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 
 use crate::body::feature::FeatureBody;
-use crate::collide::cache::Obstacle;
+use crate::collide::Obstacle;
 use crate::pattern::garment::{pattern_with_plan, DartPlan, GarmentPattern, PatternError, PatternOptions};
 use crate::refine::clear::{clear_coarse, clear_surface, ClearError, ClearOptions};
 use crate::refine::collision::{Collider, CollisionOptions, CollisionReport};

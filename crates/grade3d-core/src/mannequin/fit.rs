@@ -687,20 +687,6 @@ pub fn fit_graded(
             .map(|(id, t)| (measured.get(id).copied().unwrap_or(f64::NAN) - t).abs() * MM_PER_M)
             .fold(0.0, f64::max);
         let height_ok = (height_scale - 1.0).abs() < f64::EPSILON || rounds > 0;
-        if std::env::var("FITDBG").is_ok() {
-            eprintln!(
-                "size {} round {rounds} worst {worst:.3} {:?}",
-                row.size,
-                targets
-                    .iter()
-                    .map(|(id, t)| format!(
-                        "{}:{:.2}",
-                        id.as_str(),
-                        (measured.get(id).copied().unwrap_or(f64::NAN) - t) * MM_PER_M
-                    ))
-                    .collect::<Vec<_>>()
-            );
-        }
         if (worst < opts.girth_tolerance_mm && height_ok) || rounds >= opts.scaling_iterations {
             break;
         }

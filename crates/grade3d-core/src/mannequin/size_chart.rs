@@ -556,7 +556,7 @@ mod tests {
         assert_eq!((hips.sex, hips.sex_source), (Sex::Female, SexSource::Default));
     }
 
-    const ASTM: &str = include_str!("../../fixtures/size-charts/astm-d5585-11-misses-partial.csv");
+    const ASTM: &str = include_str!("../../../../fixtures/size-charts/astm-d5585-11-misses-partial.csv");
 
     #[test]
     fn astm_chart_parses_with_both_figure_types() {
