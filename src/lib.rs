@@ -1,15 +1,18 @@
 //! grade3d — automated 3D garment grading.
 //!
-//! The shell around [`grade3d_core`] (the pure geometry core, re-exported
-//! here module by module so that `grade3d::geom::…` and the like keep
-//! their paths): glTF and landmark input ([`io`]), the wgpu depth-map
-//! renderer and the per-body obstacle cache ([`collide`]), the MakeHuman
-//! data generator ([`makehuman`]) and the HTTP service ([`service`]). Data
-//! flow and module map: `ARCHITECTURE.md`.
+//! The workspace's top (issue #16): the `grade3d` binary's library, which
+//! names every layer under one roof so that tests, benches and examples
+//! keep their paths — the pure core's modules ([`grade3d_core`]: `geom`,
+//! `body`, `mannequin`, `template`, `refine`, `pattern`, `pipeline`), the
+//! input parsers ([`io`], `grade3d-io`), collision with the wgpu renderer
+//! ([`collide`], `grade3d-render` behind the core's `DepthRenderer`), the
+//! HTTP service ([`service`], `grade3d-service`) — and holds the MakeHuman
+//! data generator ([`makehuman`]). Data flow and module map:
+//! `ARCHITECTURE.md`.
 
 pub use grade3d_core::{body, geom, mannequin, pattern, pipeline, refine, template};
+pub use grade3d_io as io;
+pub use grade3d_service as service;
+pub use grade3d_service::collide;
 
-pub mod collide;
-pub mod io;
 pub mod makehuman;
-pub mod service;

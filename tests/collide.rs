@@ -18,8 +18,9 @@ use std::collections::HashMap;
 use std::time::Instant;
 
 use glam::DVec3;
-use grade3d::collide::depth::{DepthMap, View};
+use grade3d::collide::depth::{encode_depth, encode_normal, inside, DepthMap, View};
 use grade3d::collide::render::{GpuContext, RenderOptions};
+use grade3d::collide::{DepthRenderer, Obstacle};
 use grade3d::geom::mesh::{FaceId, TriMesh};
 use grade3d::geom::query;
 use grade3d::geom::winding::{WindingOptions, WindingTree};
@@ -39,9 +40,22 @@ const SMOOTH_STEP_M: f64 = 5e-3;
 
 /// CPU reference: nearest (`front`) and farthest (`back`) surface along the view's `d` at pixel centres.
 fn rasterise(mesh: &TriMesh, view: &View, n: u32) -> (Vec<f64>, Vec<f64>) {
+    let r = rasterise_faces(mesh, view, n);
+    (r.front, r.back)
+}
+
+/// [`rasterise`] with the face each pixel's surface belongs to.
+struct Raster {
+    front: Vec<f64>,
+    back: Vec<f64>,
+    front_face: Vec<u32>,
+    back_face: Vec<u32>,
+}
+
+fn rasterise_faces(mesh: &TriMesh, view: &View, n: u32) -> Raster {
     let px = (n * n) as usize;
-    let mut front = vec![f64::NAN; px];
-    let mut back = vec![f64::NAN; px];
+    let mut r =
+        Raster { front: vec![f64::NAN; px], back: vec![f64::NAN; px], front_face: vec![0; px], back_face: vec![0; px] };
     let to_px = |p: DVec3| {
         let fx = (p.dot(view.u) - view.u_range[0]) / (view.u_range[1] - view.u_range[0]) * f64::from(n);
         let fy = (view.w_range[1] - p.dot(view.w)) / (view.w_range[1] - view.w_range[0]) * f64::from(n);
@@ -68,16 +82,63 @@ fn rasterise(mesh: &TriMesh, view: &View, n: u32) -> (Vec<f64>, Vec<f64>) {
                 }
                 let z = w0 * a.2 + w1 * b.2 + w2 * c.2;
                 let i = (y * n + x) as usize;
-                if front[i].is_nan() || z > front[i] {
-                    front[i] = z;
+                if r.front[i].is_nan() || z > r.front[i] {
+                    r.front[i] = z;
+                    r.front_face[i] = f as u32;
                 }
-                if back[i].is_nan() || z < back[i] {
-                    back[i] = z;
+                if r.back[i].is_nan() || z < r.back[i] {
+                    r.back[i] = z;
+                    r.back_face[i] = f as u32;
                 }
             }
         }
     }
-    (front, back)
+    r
+}
+
+/// The CPU reference as the core's [`DepthRenderer`] (issue #16: the core
+/// takes its renderer as a trait): per pixel the nearest and farthest
+/// surface's depth code and its face's outward normal, as the wgpu
+/// renderer stores them.
+struct CpuReference;
+
+impl DepthRenderer for CpuReference {
+    type Error = std::convert::Infallible;
+
+    fn depth_maps(&self, mesh: &TriMesh, opts: &RenderOptions) -> Result<Vec<DepthMap>, Self::Error> {
+        let bb = mesh.aabb();
+        let n = opts.resolution;
+        let normal = |f: u32| {
+            let [a, b, c] = mesh.corners(FaceId(f));
+            (b - a).cross(c - a).normalize_or_zero().as_vec3().to_array()
+        };
+        let maps = View::set(opts.views, bb.min, bb.max, opts.padding_mm * 1e-3)
+            .into_iter()
+            .map(|view| {
+                let r = rasterise_faces(mesh, &view, n);
+                let pixels = |depth: &[f64], face: &[u32], as_normal: bool| -> Vec<[u8; 4]> {
+                    depth
+                        .iter()
+                        .zip(face)
+                        .map(|(&z, &f)| match (z.is_nan(), as_normal) {
+                            (true, _) => [0; 4],
+                            (false, false) => encode_depth(&view, z),
+                            (false, true) => encode_normal(normal(f)),
+                        })
+                        .collect()
+                };
+                let images = [
+                    pixels(&r.front, &r.front_face, false),
+                    pixels(&r.back, &r.back_face, false),
+                    pixels(&r.front, &r.front_face, true),
+                    pixels(&r.back, &r.back_face, true),
+                ];
+                let w = n as usize;
+                DepthMap::from_rows(view, n, n, |y| images.each_ref().map(|im| &im[y * w..(y + 1) * w]))
+            })
+            .collect();
+        Ok(maps)
+    }
 }
 
 fn write_png(path: &std::path::Path, n: u32, rgb: &[u8]) {
@@ -310,4 +371,43 @@ fn body_fast_and_exact_agree() {
     assert_eq!(agree, near);
     // the misses are 5 mm offsets at lips, nose and toes that cross into another part of the skin
     assert!(as_offset * 100 >= near * 98, "{as_offset}/{near}");
+}
+
+/// The core builds its obstacle from any [`DepthRenderer`] (issue #16):
+/// from the CPU reference and from wgpu, the inside test of Eq. (13)
+/// agrees between the two and with the exact winding number on a scan.
+#[test]
+fn the_core_builds_one_obstacle_from_any_renderer() {
+    let bytes = std::fs::read(fixtures().join("bodies/female-average-caucasian.glb")).unwrap();
+    let mesh = gltf::read_mesh(&bytes, &Default::default()).unwrap();
+    let opts = RenderOptions { resolution: 512, ..Default::default() };
+    let winding = WindingOptions::default();
+    let cpu = Obstacle::build(&mesh, &CpuReference, &opts, &winding).unwrap();
+    let gpu = GpuContext::new().expect("wgpu adapter (see .ci/run)");
+    let wgpu = Obstacle::build(&mesh, &gpu, &opts, &winding).unwrap();
+    let bb = mesh.aabb();
+    let mut rng = SplitMix64(16);
+    let pts: Vec<DVec3> =
+        (0..20_000).map(|_| bb.min + (bb.max - bb.min) * DVec3::new(rng.unit(), rng.unit(), rng.unit())).collect();
+    let (mut same, mut cpu_exact, mut gpu_exact, mut inside_count) = (0, 0, 0, 0);
+    for &p in &pts {
+        let (c, g) = (inside(&cpu.maps, p).is_some(), inside(&wgpu.maps, p).is_some());
+        let exact = cpu.tree.winding_number(p) >= 0.5;
+        same += usize::from(c == g);
+        cpu_exact += usize::from(c == exact);
+        gpu_exact += usize::from(g == exact);
+        inside_count += usize::from(exact);
+    }
+    let share = |k: usize| k as f64 / pts.len() as f64;
+    eprintln!(
+        "{} of {} points inside; CPU vs wgpu {:.4}, CPU vs exact {:.4}, wgpu vs exact {:.4}",
+        inside_count,
+        pts.len(),
+        share(same),
+        share(cpu_exact),
+        share(gpu_exact)
+    );
+    assert!(inside_count > 1_000, "the sample reaches into the body");
+    assert!(share(same) >= 0.998, "CPU and wgpu obstacles agree on {:.4}", share(same));
+    assert!(share(cpu_exact) >= 0.995 && share(gpu_exact) >= 0.995, "{:.4} {:.4}", share(cpu_exact), share(gpu_exact));
 }

@@ -11,8 +11,9 @@
 //! declared girth is taken after decoding ([`Graded::expected_ease_mm`]).
 //!
 //! Pure core: data in, data out; the body's depth maps come in as an
-//! [`Obstacle`] that the caller renders (and caches) with
-//! [`crate::collide::render::GpuContext`]. Without an obstacle the garment
+//! [`Obstacle`] that the caller builds ([`Obstacle::build`], from any
+//! [`crate::collide::DepthRenderer`]: the service's is wgpu's, in
+//! `grade3d-render`) and caches. Without an obstacle the garment
 //! is refined without collision avoidance. Each stage's wall time is
 //! reported ([`StageTimings`]) for the service's metrics and the fit report.
 //!

@@ -22,27 +22,10 @@ use bytemuck::{Pod, Zeroable};
 use glam::DVec3;
 use wgpu::util::DeviceExt;
 
-use super::depth::{DepthMap, View, ViewSet, DEPTH_CODES};
-use crate::geom::mesh::TriMesh;
-
-/// Knobs of the renderer.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(default)]
-pub struct RenderOptions {
-    /// Depth-map resolution, pixels per side. Default 1024 (at 512 the
-    /// inside test agrees with the exact one on 99.88 % of points, at 1024 on 99.92 %).
-    pub resolution: u32,
-    /// Which views. Default front/back and left/right.
-    pub views: ViewSet,
-    /// Margin around the body's bounding box, mm. Default 20.
-    pub padding_mm: f64,
-}
-
-impl Default for RenderOptions {
-    fn default() -> Self {
-        Self { resolution: 1024, views: ViewSet::FrontBackSides, padding_mm: 20.0 }
-    }
-}
+use grade3d_core::collide::depth::{DepthMap, View, DEPTH_CODES};
+use grade3d_core::collide::DepthRenderer;
+pub use grade3d_core::collide::RenderOptions;
+use grade3d_core::geom::mesh::TriMesh;
 
 /// Why rendering failed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -363,6 +346,14 @@ impl GpuContext {
                 buf
             })
         })
+    }
+}
+
+impl DepthRenderer for GpuContext {
+    type Error = RenderError;
+
+    fn depth_maps(&self, mesh: &TriMesh, opts: &RenderOptions) -> Result<Vec<DepthMap>, RenderError> {
+        self.render(mesh, opts)
     }
 }
 

@@ -37,7 +37,7 @@ use crate::body::measure::{measure, MeasureOptions};
 use crate::collide::cache::{BodyKey, Obstacle, ObstacleCache};
 use crate::collide::render::{GpuContext, RenderError, RenderOptions};
 use crate::geom::mesh::{TriMesh, VertexId};
-use crate::geom::winding::{WindingOptions, WindingTree};
+use crate::geom::winding::WindingOptions;
 use crate::io::gltf::{read_mesh, write_glb, GlbAttribute, GltfError, GltfReadOptions};
 use crate::io::landmarks::{parse_landmarks, LandmarkFileError};
 use crate::mannequin::fit::{fit_graded, fit_size, FitError, FitOptions, FittedMannequin};
@@ -254,13 +254,7 @@ impl WorkContext {
         let start = Instant::now();
         let Some(gpu) = &self.gpu else { return Ok(None) };
         // the winding tree is built on the CPU while the maps render (issue #15)
-        let build = || -> Result<Obstacle, RenderError> {
-            let (maps, tree) = rayon::join(
-                || gpu.render(mesh, &self.opts.render),
-                || WindingTree::new(mesh, &WindingOptions::default()),
-            );
-            Ok(Obstacle { maps: maps?, tree })
-        };
+        let build = || Obstacle::build(mesh, gpu.as_ref(), &self.opts.render, &WindingOptions::default());
         let obstacle = if cache {
             self.obstacles.get_or_build(BodyKey::of(mesh, &self.opts.render), build)?
         } else {
@@ -864,7 +858,7 @@ mod tests {
         let bad: BTreeMap<(u8, u8), u8> = [((1, 2), 3)].into_iter().collect();
         let e = json_bytes("x.pattern.json", &bad, false).unwrap_err();
         assert!(matches!(&e, WorkError::Serialise { what, .. } if what == "x.pattern.json"), "{e}");
-        let p = crate::service::problem::Problem::from(e);
+        let p = crate::problem::Problem::from(e);
         assert_eq!(p.status, 500);
         assert!(!p.detail.contains("key must be a string"), "{}", p.detail);
         assert_eq!(json_bytes("ok", &serde_json::json!({"a": 1}), false).unwrap(), br#"{"a":1}"#);

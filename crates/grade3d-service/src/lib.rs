@@ -10,6 +10,16 @@
 //! - `POST /v1/grade/size-chart` (JSON or CSV), `POST /v1/grade/scan` (multipart)
 //! - `GET /v1/results/{id}`, `GET /v1/results/{id}/{artefact}`
 //! - `POST /v1/jobs`, `GET /v1/jobs/{id}`, `GET /v1/jobs/{id}/artefacts/{artefact}`
+//!
+//! The `grade3d-service` crate (issue #16): it depends on the pure core,
+//! the input parsers (`grade3d-io`) and the wgpu renderer
+//! (`grade3d-render`); the core's modules are named here as `crate::geom`
+//! and the like, as they were when this was one crate.
+
+use grade3d_core::{body, geom, mannequin, pattern, pipeline, refine, template};
+use grade3d_io as io;
+
+pub mod collide;
 
 use std::path::PathBuf;
 use std::sync::{Arc, OnceLock};
