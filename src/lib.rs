@@ -6,13 +6,11 @@
 //! `body`, `mannequin`, `template`, `refine`, `pattern`, `pipeline`), the
 //! input parsers ([`io`], `grade3d-io`), collision with the wgpu renderer
 //! ([`collide`], `grade3d-render` behind the core's `DepthRenderer`), the
-//! HTTP service ([`service`], `grade3d-service`) — and holds the MakeHuman
-//! data generator ([`makehuman`]). Data flow and module map:
+//! HTTP service ([`service`], `grade3d-service`). The data generators are
+//! the `xtask` crate (`cargo xtask data …`). Data flow and module map:
 //! `ARCHITECTURE.md`.
 
 pub use grade3d_core::{body, geom, mannequin, pattern, pipeline, refine, template};
 pub use grade3d_io as io;
 pub use grade3d_service as service;
 pub use grade3d_service::collide;
-
-pub mod makehuman;

@@ -63,11 +63,6 @@ enum Command {
         #[arg(long, default_value = "target/panels")]
         dir: PathBuf,
     },
-    /// Regenerate shipped data from ../shared sources.
-    Data {
-        #[command(subcommand)]
-        what: DataCommand,
-    },
 }
 
 /// `grade3d grade`: a size chart (`--chart`) or scans (`--scan` with `--landmarks`).
@@ -120,40 +115,6 @@ impl std::fmt::Display for BadInput {
 
 impl std::error::Error for BadInput {}
 
-#[derive(Subcommand)]
-enum DataCommand {
-    /// Rebuild templates/mannequin/hm08.bin.gz from the MakeHuman folder.
-    Mannequin {
-        /// The MakeHuman hm08 folder.
-        #[arg(long, default_value = "../shared/makehuman")]
-        makehuman: PathBuf,
-        /// Output file.
-        #[arg(long, default_value = "templates/mannequin/hm08.bin.gz")]
-        out: PathBuf,
-    },
-    /// Rebuild the built-in garment templates (templates/garments/*.json) on the reference body.
-    Templates {
-        /// Output folder.
-        #[arg(long, default_value = "templates/garments")]
-        dir: PathBuf,
-    },
-    /// Extract MakeHuman's dense garment surfaces (helper-skirt, helper-tights) into fixtures/garments.
-    Garments {
-        /// The MakeHuman hm08 folder.
-        #[arg(long, default_value = "../shared/makehuman")]
-        makehuman: PathBuf,
-        /// Output folder.
-        #[arg(long, default_value = "fixtures/garments")]
-        dir: PathBuf,
-    },
-    /// Rebuild fixtures/bodies (8 bodies) and fixtures/astm (12 ASTM D5585 sizes).
-    Fixtures {
-        /// The fixtures folder.
-        #[arg(long, default_value = "fixtures")]
-        dir: PathBuf,
-    },
-}
-
 fn main() -> ExitCode {
     tracing_subscriber::fmt()
         .with_env_filter(tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into()))
@@ -178,46 +139,6 @@ fn main() -> ExitCode {
 fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
     match cli.command {
         Command::Serve(cfg) => serve(cfg)?,
-        Command::Data { what: DataCommand::Mannequin { makehuman, out } } => {
-            let data = grade3d::makehuman::from_makehuman(&makehuman)?;
-            let bytes = grade3d::mannequin::data::encode(&data);
-            std::fs::write(&out, &bytes)?;
-            println!(
-                "wrote {} ({} bytes): {} vertices, {} triangles, {} targets, {} rings",
-                out.display(),
-                bytes.len(),
-                data.positions.len(),
-                data.triangles.len(),
-                data.targets.len(),
-                data.rings.len()
-            );
-        }
-        Command::Data { what: DataCommand::Fixtures { dir } } => write_fixtures(&dir)?,
-        Command::Data { what: DataCommand::Templates { dir } } => {
-            std::fs::create_dir_all(&dir)?;
-            for t in grade3d::template::library::author_all()? {
-                let path = dir.join(format!("{}.json", t.name));
-                std::fs::write(&path, t.to_json())?;
-                println!("wrote {} ({} nodes, {} faces)", path.display(), t.nodes.len(), t.faces.len());
-            }
-        }
-        Command::Data { what: DataCommand::Garments { makehuman, dir } } => {
-            std::fs::create_dir_all(&dir)?;
-            for group in ["helper-skirt", "helper-tights"] {
-                let (pos, tris) = grade3d::makehuman::obj_group(&makehuman, group)?;
-                let raw: Vec<[u64; 3]> = tris.iter().map(|t| t.map(u64::from)).collect();
-                let mesh = grade3d::geom::mesh::TriMesh::from_raw(pos, &raw)?;
-                let glb = grade3d::io::gltf::write_glb(&mesh, None, &[], "grade3d fixtures (MakeHuman hm08, CC0)")?;
-                let path = dir.join(format!("{group}.glb"));
-                std::fs::write(&path, glb)?;
-                println!(
-                    "wrote {} ({} vertices, {} triangles)",
-                    path.display(),
-                    mesh.vertex_count(),
-                    mesh.face_count()
-                );
-            }
-        }
         Command::FitChart { chart, figure, base_size, independent } => {
             fit_chart(&chart, &figure, base_size.as_deref(), independent)?
         }
@@ -226,55 +147,6 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
         Command::Panels { dir } => write_panels(&dir)?,
         Command::Measure { body, landmarks } => measure_body(&body, &landmarks)?,
     }
-    Ok(())
-}
-
-fn write_body(
-    dir: &std::path::Path,
-    name: &str,
-    mesh: &grade3d::geom::mesh::TriMesh,
-    lm: &grade3d::body::derive::Landmarks,
-) -> Result<(), Box<dyn std::error::Error>> {
-    let glb = grade3d::io::gltf::write_glb(mesh, None, &[], "grade3d fixtures")?;
-    std::fs::write(dir.join(format!("{name}.glb")), glb)?;
-    std::fs::write(dir.join(format!("{name}.landmarks.json")), grade3d::io::landmarks::write_landmarks(lm))?;
-    Ok(())
-}
-
-fn write_fixtures(dir: &std::path::Path) -> Result<(), Box<dyn std::error::Error>> {
-    use grade3d::mannequin::{fit, fixtures, landmarks, model::BodyModel, size_chart};
-    let model = BodyModel::embedded()?;
-    let bodies = dir.join("bodies");
-    std::fs::create_dir_all(&bodies)?;
-    let mut manifest = serde_json::Map::new();
-    for f in fixtures::fixture_bodies() {
-        let mesh = model.build(&f.params)?;
-        let lm = landmarks::hm08_landmarks(model, &mesh, &Default::default())?;
-        write_body(&bodies, f.name, &mesh, &lm)?;
-        manifest.insert(f.name.to_owned(), serde_json::to_value(&f.params)?);
-        println!("wrote {}", f.name);
-    }
-    std::fs::write(bodies.join("manifest.json"), serde_json::to_string_pretty(&manifest)? + "\n")?;
-    let astm = dir.join("astm");
-    std::fs::create_dir_all(&astm)?;
-    let chart_text = std::fs::read_to_string(dir.join("size-charts/astm-d5585-11-misses-partial.csv"))?;
-    let chart = size_chart::parse_csv(&chart_text, &Default::default())?;
-    let mut report = serde_json::Map::new();
-    // one graded run from the sample size 8 (tests/pattern.rs grades it with base size 8)
-    let base = chart.rows.iter().position(|r| r.size == ASTM_BASE_SIZE).ok_or("the ASTM chart has no size 8")?;
-    let fits = fit::fit_chart(model, &chart.rows, base, &fit::FitOptions::default())?;
-    for (row, fitted) in chart.rows.iter().zip(fits) {
-        let lm = landmarks::hm08_landmarks(model, &fitted.body.mesh, &Default::default())?;
-        write_body(&astm, &format!("size-{}", row.size), &fitted.body.mesh, &lm)?;
-        let residuals: serde_json::Map<String, serde_json::Value> = fitted
-            .residuals
-            .iter()
-            .map(|(k, r)| (k.as_str().to_owned(), serde_json::json!({"target_mm": r.target_m * 1e3, "achieved_mm": r.achieved_m * 1e3, "error_mm": r.error_mm()})))
-            .collect();
-        report.insert(row.size.clone(), serde_json::json!({"params": fitted.params, "profile_scales": fitted.profile_scales.iter().map(|(k, v)| (k.as_str().to_owned(), *v)).collect::<std::collections::BTreeMap<_, _>>(), "residuals": residuals}));
-        println!("wrote size {}", row.size);
-    }
-    std::fs::write(astm.join("fit-report.json"), serde_json::to_string_pretty(&report)? + "\n")?;
     Ok(())
 }
 
@@ -408,9 +280,6 @@ fn grade_offline(args: &GradeArgs) -> Result<(), Box<dyn std::error::Error>> {
     }
     Ok(())
 }
-
-/// The base size of the ASTM fixtures' graded run (`data fixtures`).
-const ASTM_BASE_SIZE: &str = "8";
 
 fn fit_chart(
     path: &std::path::Path,

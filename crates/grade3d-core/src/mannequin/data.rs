@@ -11,7 +11,7 @@
 //! in units of 1e-4 dm and deltas `i16` in units of 1e-3 dm. The file is
 //! gzip-compressed.
 //!
-//! **Reproduce** with `cargo run --release -- data mannequin` (reads
+//! **Reproduce** with `cargo xtask data mannequin` (reads
 //! `../shared/makehuman`, see README.md).
 //!
 //! Layout (little endian, inside gzip):

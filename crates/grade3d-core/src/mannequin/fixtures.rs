@@ -1,5 +1,5 @@
 //! The test-fixture bodies: eight adults spanning gender, build, stature
-//! and race, built from the embedded model. `grade3d data fixtures`
+//! and race, built from the embedded model. `cargo xtask data fixtures`
 //! writes each as GLB + landmarks JSON under `fixtures/bodies/`, and the
 //! ASTM D5585 size mannequins under `fixtures/astm/`.
 

@@ -1,4 +1,4 @@
-//! The built-in template library: its authoring (`grade3d data templates`
+//! The built-in template library: its authoring (`cargo xtask data templates`
 //! writes `templates/garments/*.json`) and its loading at start-up.
 //!
 //! Templates are authored on a **reference body** — the embedded mannequin

@@ -1,4 +1,4 @@
-//! The generator of the embedded hm08 data (`grade3d data mannequin`,
+//! The generator of the embedded hm08 data (`cargo xtask data mannequin`,
 //! `data garments`): reads a MakeHuman folder from disk and builds the
 //! [`Hm08Data`] the core's [`grade3d_core::mannequin::data::encode`] packs.
 //! Generator only, never used at run time; file I/O lives here, not in the
