@@ -408,6 +408,16 @@ fn too_large(max: usize) -> Problem {
     )
 }
 
+/// Whether `given` is `key`, in constant time: both hashed (BLAKE3, so
+/// the comparison takes as long whatever their lengths) and the digests
+/// compared with `subtle` (issue #16: a hand-written fold the optimiser
+/// was free to cut short).
+fn keys_match(given: &str, key: &str) -> bool {
+    use subtle::ConstantTimeEq;
+    let (a, b) = (blake3::hash(given.as_bytes()), blake3::hash(key.as_bytes()));
+    a.as_bytes().ct_eq(b.as_bytes()).into()
+}
+
 fn check_key(s: &AppState, headers: &HeaderMap, write: bool) -> Result<(), Problem> {
     if !write && !s.0.cfg.protect_reads {
         return Ok(());
@@ -425,10 +435,7 @@ fn check_key(s: &AppState, headers: &HeaderMap, write: bool) -> Result<(), Probl
         .and_then(|v| v.to_str().ok())
         .and_then(|v| v.strip_prefix("Bearer "))
         .ok_or_else(|| Problem::unauthorized("an `Authorization: Bearer <API key>` header is required"))?;
-    // constant-time comparison
-    let (a, b) = (given.as_bytes(), key.as_bytes());
-    let same = a.len() == b.len() && a.iter().zip(b).fold(0u8, |acc, (x, y)| acc | (x ^ y)) == 0;
-    if same {
+    if keys_match(given, key) {
         Ok(())
     } else {
         Err(Problem::unauthorized("the API key is not valid"))
@@ -1221,6 +1228,14 @@ mod tests {
         let resp = app(s).oneshot(Request::get("/v1/templates").body(Body::empty()).unwrap()).await.unwrap();
         assert_eq!(resp.status(), StatusCode::OK);
         let _ = std::fs::remove_dir_all(dir);
+    }
+
+    #[test]
+    fn api_keys_match_only_when_equal() {
+        assert!(keys_match("k3y", "k3y"));
+        for wrong in ["", "k3", "k3y ", "K3Y", "k3z", "a much longer key than the real one"] {
+            assert!(!keys_match(wrong, "k3y"), "{wrong:?}");
+        }
     }
 
     #[test]

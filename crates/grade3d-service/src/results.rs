@@ -2,11 +2,11 @@
 //! of everything it depends on (flow, canonical inputs, template
 //! documents, options), kept in memory, least recently used evicted past a
 //! byte budget; entries may carry an expiry (scan results: personal data,
-//! kept no longer than the configured TTL, then purged by a sweeper).
+//! kept no longer than the configured TTL, then freed by `moka`'s
+//! housekeeping on the service's tick).
 
-use std::collections::VecDeque;
-use std::sync::{Arc, Mutex};
-use std::time::Instant;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
 
 use super::work::Artefact;
 
@@ -37,65 +37,71 @@ impl Stored {
     }
 }
 
-/// The cache.
+/// The cache: `moka` (issue #16: it replaced a hand-kept deque), weighed
+/// in bytes ([`Stored`]'s artefacts), least recently used out past the
+/// budget, each entry gone at its own expiry.
 #[derive(Debug)]
 pub struct ResultCache {
     max_bytes: usize,
-    entries: Mutex<VecDeque<(String, Arc<Stored>)>>,
+    entries: moka::sync::Cache<String, Arc<Stored>>,
+}
+
+/// An entry lives until its [`Stored::expires`], if it has one.
+struct UntilExpiry;
+
+impl moka::Expiry<String, Arc<Stored>> for UntilExpiry {
+    fn expire_after_create(&self, _: &String, value: &Arc<Stored>, created_at: Instant) -> Option<Duration> {
+        value.expires.map(|t| t.saturating_duration_since(created_at))
+    }
 }
 
 impl ResultCache {
     /// A cache holding at most `max_bytes` of artefacts.
     pub fn new(max_bytes: usize) -> Self {
-        Self { max_bytes, entries: Mutex::new(VecDeque::new()) }
+        let entries = moka::sync::Cache::builder()
+            .max_capacity(max_bytes as u64)
+            .weigher(|_: &String, v: &Arc<Stored>| u32::try_from(v.bytes()).unwrap_or(u32::MAX))
+            .eviction_policy(moka::policy::EvictionPolicy::lru())
+            .expire_after(UntilExpiry)
+            .build();
+        Self { max_bytes, entries }
     }
 
     /// The live entry `id`, marked most recently used.
     pub fn get(&self, id: &str) -> Option<Arc<Stored>> {
-        let mut e = self.entries.lock().unwrap_or_else(|p| p.into_inner());
-        let pos = e.iter().position(|(k, _)| k == id)?;
-        let entry = e.remove(pos)?;
-        if entry.1.expires.is_some_and(|t| t <= Instant::now()) {
-            return None;
-        }
-        let found = Arc::clone(&entry.1);
-        e.push_back(entry);
-        Some(found)
+        // moka's expiry and this check agree; the check makes "expired" exact at the instant
+        self.entries.get(id).filter(|s| s.expires.is_none_or(|t| t > Instant::now()))
     }
 
     /// Stores `s` under `id` (replacing), evicting the least recently used
     /// past the budget; an entry larger than the budget is not kept.
     pub fn put(&self, id: String, s: Stored) -> Arc<Stored> {
         let s = Arc::new(s);
-        let size = s.bytes();
-        let mut e = self.entries.lock().unwrap_or_else(|p| p.into_inner());
-        e.retain(|(k, _)| *k != id);
-        if size > self.max_bytes {
-            return s;
+        if s.bytes() > self.max_bytes {
+            self.entries.invalidate(&id);
+        } else {
+            self.entries.insert(id, Arc::clone(&s));
         }
-        let mut total: usize = e.iter().map(|(_, v)| v.bytes()).sum::<usize>() + size;
-        while total > self.max_bytes {
-            match e.pop_front() {
-                Some((_, old)) => total -= old.bytes(),
-                None => break,
-            }
-        }
-        e.push_back((id, Arc::clone(&s)));
+        // evict now, not at the next housekeeping: the budget bounds memory
+        self.entries.run_pending_tasks();
         s
     }
 
-    /// Drops every expired entry; returns how many.
+    /// Frees what has expired (moka's housekeeping, driven by the service's
+    /// 5 s tick: scan results are personal data, and their memory is given
+    /// back within a tick and moka's timer-wheel step, about 1 s, after
+    /// their TTL even when no request comes; never served after it);
+    /// returns how many entries went.
     pub fn purge_expired(&self) -> usize {
-        let now = Instant::now();
-        let mut e = self.entries.lock().unwrap_or_else(|p| p.into_inner());
-        let before = e.len();
-        e.retain(|(_, v)| v.expires.is_none_or(|t| t > now));
-        before - e.len()
+        let before = self.entries.entry_count();
+        self.entries.run_pending_tasks();
+        usize::try_from(before.saturating_sub(self.entries.entry_count())).unwrap_or(usize::MAX)
     }
 
     /// Entries held.
     pub fn len(&self) -> usize {
-        self.entries.lock().unwrap_or_else(|p| p.into_inner()).len()
+        self.entries.run_pending_tasks();
+        usize::try_from(self.entries.entry_count()).unwrap_or(usize::MAX)
     }
 
     /// Whether none is held.
@@ -107,7 +113,6 @@ impl ResultCache {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::time::Duration;
 
     fn stored(n: usize, expires: Option<Instant>) -> Stored {
         Stored {
@@ -133,11 +138,16 @@ mod tests {
         c.put("c".into(), stored(1000, None));
         assert!(c.get("b").is_none(), "b was least recently used");
         assert!(c.get("a").is_some() && c.get("c").is_some());
-        c.put("d".into(), stored(10, Some(Instant::now() - Duration::from_secs(1))));
-        assert!(c.get("d").is_none());
-        c.put("e".into(), stored(10, Some(Instant::now() - Duration::from_secs(1))));
-        assert_eq!(c.purge_expired(), 1);
         c.put("huge".into(), stored(1 << 20, None));
-        assert!(c.get("huge").is_none());
+        assert!(c.get("huge").is_none(), "over the budget: not kept");
+        assert!(c.get("a").is_some() && c.get("c").is_some(), "and it evicts nothing");
+        // an entry past its expiry is never served (moka frees its memory on its timer
+        // wheel's next step, about a second, at the housekeeping `purge_expired` runs)
+        let c = ResultCache::new(1 << 20);
+        c.put("d".into(), stored(10, Some(Instant::now() - Duration::from_secs(1))));
+        c.put("f".into(), stored(10, Some(Instant::now() + Duration::from_secs(600))));
+        assert!(c.get("d").is_none());
+        c.purge_expired();
+        assert!(c.get("f").is_some());
     }
 }

@@ -5,15 +5,13 @@
 //! triangles (little-endian `f64` / `u32`) and of the [`RenderOptions`], so
 //! the same scan posted twice, or the same size-chart mannequin graded with
 //! another template, reuses its maps. Least-recently-used eviction at
-//! [`ObstacleCacheOptions::capacity`] entries. A lookup that misses runs the
-//! given builder outside the lock (two concurrent misses of one body may
-//! both build; the first insert wins). Hits and misses are counted for the
-//! service's metrics. No failure modes of its own: the builder's error is
+//! [`ObstacleCacheOptions::capacity`] entries (`moka`). Concurrent misses of
+//! one body build it once. Hits and misses are counted for the service's
+//! metrics. No failure modes of its own: the builder's error is
 //! passed through and nothing is cached.
 
-use std::collections::VecDeque;
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
 use super::render::RenderOptions;
 use crate::geom::mesh::TriMesh;
@@ -63,12 +61,14 @@ impl Default for ObstacleCacheOptions {
     }
 }
 
-/// LRU cache of [`Obstacle`]s keyed by [`BodyKey`]; shareable across threads.
+/// LRU cache of [`Obstacle`]s keyed by [`BodyKey`]; shareable across
+/// threads. A `moka` cache (issue #16: it replaced a hand-kept deque):
+/// least recently used out past [`ObstacleCacheOptions::capacity`], and
+/// concurrent misses of one body build it once (the others wait for it).
 #[derive(Debug)]
 pub struct ObstacleCache {
-    opts: ObstacleCacheOptions,
-    /// Most recently used last.
-    entries: Mutex<VecDeque<(BodyKey, Arc<Obstacle>)>>,
+    entries: moka::sync::Cache<BodyKey, Arc<Obstacle>>,
+    capacity: usize,
     hits: AtomicU64,
     misses: AtomicU64,
 }
@@ -76,45 +76,37 @@ pub struct ObstacleCache {
 impl ObstacleCache {
     /// An empty cache.
     pub fn new(opts: ObstacleCacheOptions) -> Self {
-        Self { opts, entries: Mutex::new(VecDeque::new()), hits: AtomicU64::new(0), misses: AtomicU64::new(0) }
+        let entries = moka::sync::Cache::builder()
+            .max_capacity(opts.capacity as u64)
+            .eviction_policy(moka::policy::EvictionPolicy::lru())
+            .build();
+        Self { entries, capacity: opts.capacity, hits: AtomicU64::new(0), misses: AtomicU64::new(0) }
     }
 
     /// The cached obstacle of `key`, or `build()`'s, inserted.
     ///
     /// # Errors
     /// `build`'s error; nothing is cached then.
-    pub fn get_or_build<E>(
+    pub fn get_or_build<E: Clone + Send + Sync + 'static>(
         &self,
         key: BodyKey,
         build: impl FnOnce() -> Result<Obstacle, E>,
     ) -> Result<Arc<Obstacle>, E> {
-        if let Some(hit) = self.lookup(key) {
+        if let Some(hit) = self.entries.get(&key) {
             self.hits.fetch_add(1, Ordering::Relaxed);
             return Ok(hit);
         }
         self.misses.fetch_add(1, Ordering::Relaxed);
-        let built = Arc::new(build()?);
-        let mut entries = self.entries.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(pos) = entries.iter().position(|(k, _)| *k == key) {
-            return Ok(Arc::clone(&entries[pos].1));
+        if self.capacity == 0 {
+            return build().map(Arc::new);
         }
-        if self.opts.capacity == 0 {
-            return Ok(built);
-        }
-        while entries.len() >= self.opts.capacity {
-            entries.pop_front();
-        }
-        entries.push_back((key, Arc::clone(&built)));
+        let built = self
+            .entries
+            .try_get_with(key, || build().map(Arc::new))
+            .map_err(|e| Arc::try_unwrap(e).unwrap_or_else(|shared| (*shared).clone()))?;
+        // evict now, not at the next housekeeping: the capacity bounds memory
+        self.entries.run_pending_tasks();
         Ok(built)
-    }
-
-    fn lookup(&self, key: BodyKey) -> Option<Arc<Obstacle>> {
-        let mut entries = self.entries.lock().unwrap_or_else(|e| e.into_inner());
-        let pos = entries.iter().position(|(k, _)| *k == key)?;
-        let entry = entries.remove(pos)?;
-        let found = Arc::clone(&entry.1);
-        entries.push_back(entry);
-        Some(found)
     }
 
     /// Lookups served from the cache.
@@ -129,7 +121,8 @@ impl ObstacleCache {
 
     /// Bodies held now.
     pub fn len(&self) -> usize {
-        self.entries.lock().unwrap_or_else(|e| e.into_inner()).len()
+        self.entries.run_pending_tasks();
+        self.entries.entry_count() as usize
     }
 
     /// Whether no body is held.
