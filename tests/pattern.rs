@@ -356,7 +356,7 @@ fn patterns_on_every_body_meet_the_bars() {
                 ))
             );
         }
-        std::fs::write(dir.join(format!("{style}-rules.csv")), rul::rules_table_csv(&rules)).unwrap();
+        std::fs::write(dir.join(format!("{style}-rules.csv")), rul::rules_table_csv(&rules).unwrap()).unwrap();
         std::fs::write(dir.join(format!("{style}.rul")), rul::rules_rul(&rules)).unwrap();
     }
     eprintln!(
@@ -482,7 +482,7 @@ fn exports_pass_the_ezdxf_check() {
     write("pieces.svg", svg::pieces_svg(&pieces, &svg::SvgOptions::default()).as_bytes());
     write("nest.svg", svg::nest_svg("Dress", &nests, &svg::SvgOptions::default()).as_bytes());
     write("rules.rul", rul::rules_rul(&table).as_bytes());
-    write("rules.csv", rul::rules_table_csv(&table).as_bytes());
+    write("rules.csv", rul::rules_table_csv(&table).unwrap_or_else(|e| fail("csv", &e)).as_bytes());
 
     let script = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/ezdxf_check.py");
     let required = std::env::var("GRADE3D_REQUIRE_PEERS").is_ok_and(|v| v == "1");

@@ -594,7 +594,7 @@ fn graded_nest(
     out.push(Artefact {
         name: format!("{template}.rules.csv"),
         media_type: "text/csv",
-        bytes: rul::rules_table_csv(&rules).into_bytes(),
+        bytes: rul::rules_table_csv(&rules)?.into_bytes(),
     });
     out.push(Artefact {
         // named after the nest DXF whose `# n` texts it numbers, as CAD systems pair them

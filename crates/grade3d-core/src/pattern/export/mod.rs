@@ -45,6 +45,9 @@ use super::piece::{PatternPiece, PieceNotch};
 /// Why an export (or the read-back of one) failed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ExportError {
+    /// The CSV writer failed (it writes into memory, so only on a broken invariant).
+    #[error("CSV: {0}")]
+    Csv(String),
     /// A coordinate of a piece is NaN or infinite.
     #[error("piece '{piece}' (size '{size}'): {what} has a coordinate that is not finite")]
     NonFinite {

@@ -43,6 +43,7 @@ use std::fmt::Write as _;
 
 use glam::DVec2;
 
+use super::ExportError;
 use crate::pattern::piece::GradeRuleTable;
 
 /// How the `.RUL` file is written.
@@ -143,14 +144,16 @@ impl Default for RulOptions {
 }
 
 /// The rule table as CSV (module docs).
-pub fn rules_table_csv(t: &GradeRuleTable) -> String {
-    let mut out = String::new();
+pub fn rules_table_csv(t: &GradeRuleTable) -> Result<String, ExportError> {
+    let csv_error = |e: csv::Error| ExportError::Csv(e.to_string());
+    // RFC 4180 through the `csv` crate (issue #16): fields quoted where needed, `\n` line ends
+    let mut w = csv::WriterBuilder::new().terminator(csv::Terminator::Any(b'\n')).from_writer(Vec::new());
     let mut header = vec!["piece".to_string(), "rule".to_string(), "node".to_string(), "label".to_string()];
     for s in &t.sizes {
         header.push(format!("{s}_dx"));
         header.push(format!("{s}_dy"));
     }
-    push_row(&mut out, &header);
+    w.write_record(&header).map_err(csv_error)?;
     for piece in &t.pieces {
         for rule in &piece.rules {
             let mut row = vec![piece.piece.clone(), rule.number.to_string(), rule.node.to_string(), rule.label.clone()];
@@ -163,10 +166,11 @@ pub fn rules_table_csv(t: &GradeRuleTable) -> String {
                     None => row.extend([String::new(), String::new()]),
                 }
             }
-            push_row(&mut out, &row);
+            w.write_record(&row).map_err(csv_error)?;
         }
     }
-    out
+    let bytes = w.into_inner().map_err(|e| ExportError::Csv(e.to_string()))?;
+    String::from_utf8(bytes).map_err(|e| ExportError::Csv(e.to_string()))
 }
 
 /// The rule table as an AAMA/ASTM `.RUL` file with the default options (module docs).
@@ -238,16 +242,6 @@ fn one_line(s: &str) -> String {
     s.replace(['\r', '\n'], " ")
 }
 
-/// One CSV record.
-fn push_row(out: &mut String, fields: &[String]) {
-    let quoted: Vec<String> = fields
-        .iter()
-        .map(|f| if f.contains([',', '"', '\n', '\r']) { format!("\"{}\"", f.replace('"', "\"\"")) } else { f.clone() })
-        .collect();
-    out.push_str(&quoted.join(","));
-    out.push('\n');
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -311,7 +305,7 @@ mod tests {
     fn csv_has_a_row_per_rule_and_quotes_what_needs_it() {
         let mut t = samples::rules();
         t.pieces[0].rules[0].label = "waist, \"front\"".to_string();
-        let csv = rules_table_csv(&t);
+        let csv = rules_table_csv(&t).unwrap();
         let lines: Vec<&str> = csv.lines().collect();
         assert_eq!(lines[0], "piece,rule,node,label,S_dx,S_dy,M_dx,M_dy,L & XL_dx,L & XL_dy");
         let n_rules: usize = t.pieces.iter().map(|p| p.rules.len()).sum();
@@ -320,7 +314,7 @@ mod tests {
         assert!(lines.iter().any(|l| l.starts_with("\"back \"\"left\"\" 'L' > x\",")));
         // a short rule gets empty cells
         t.pieces[0].rules[0].deltas.truncate(1);
-        let short = rules_table_csv(&t);
+        let short = rules_table_csv(&t).unwrap();
         assert!(short.lines().nth(1).is_some_and(|l| l.ends_with(",8,8,,,,")), "{short}");
     }
 }
