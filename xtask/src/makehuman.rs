@@ -10,10 +10,6 @@ use std::path::Path;
 
 use grade3d_core::mannequin::data::{DataError, Hm08Data, DELTA_UNIT_DM, POSITION_UNIT_DM, SKIN_VERTICES};
 
-fn malformed(what: &str, detail: impl Into<String>) -> DataError {
-    DataError::Malformed { what: what.to_owned(), detail: detail.into() }
-}
-
 /// Target folders (under `targets/`) that are shipped, and a filter on
 /// the file name within each.
 const SHIPPED: &[(&str, &str)] = &[
@@ -37,7 +33,10 @@ fn read_text(path: &Path) -> Result<String, DataError> {
 fn fixed(x: f64, unit: f64, what: &str) -> Result<f64, DataError> {
     let q = x / unit;
     if (q - q.round()).abs() > 1e-3 {
-        return Err(malformed(what, format!("{x} is not a multiple of {unit}: the encoding would lose precision")));
+        return Err(DataError::malformed(
+            what,
+            format!("{x} is not a multiple of {unit}: the encoding would lose precision"),
+        ));
     }
     Ok(q.round())
 }
@@ -60,14 +59,14 @@ pub fn from_makehuman(dir: &Path) -> Result<Hm08Data, DataError> {
             continue;
         }
         if ids.iter().any(|&i| i >= SKIN_VERTICES) {
-            return Err(malformed("base.obj", format!("body face {ids:?} leaves the skin")));
+            return Err(DataError::malformed("base.obj", format!("body face {ids:?} leaves the skin")));
         }
         for k in 1..ids.len() - 1 {
             triangles.push([ids[0] as u16, ids[k] as u16, ids[k + 1] as u16]);
         }
     }
     if positions.len() != SKIN_VERTICES {
-        return Err(malformed("base.obj", format!("{} skin vertices", positions.len())));
+        return Err(DataError::malformed("base.obj", format!("{} skin vertices", positions.len())));
     }
     let mut mirror = vec![0u16; SKIN_VERTICES];
     for line in read_text(&dir.join("hm08.mirror"))?.lines() {
@@ -75,14 +74,14 @@ pub fn from_makehuman(dir: &Path) -> Result<Hm08Data, DataError> {
         if let [a, b] = f[..] {
             if a < SKIN_VERTICES {
                 if b >= SKIN_VERTICES {
-                    return Err(malformed("hm08.mirror", format!("skin vertex {a} mirrors to {b}")));
+                    return Err(DataError::malformed("hm08.mirror", format!("skin vertex {a} mirrors to {b}")));
                 }
                 mirror[a] = b as u16;
             }
         }
     }
     let measures: serde_json::Value = serde_json::from_str(&read_text(&dir.join("measures.json"))?)
-        .map_err(|e| malformed("measures.json", e.to_string()))?;
+        .map_err(|e| DataError::malformed("measures.json", e.to_string()))?;
     let mut rings = BTreeMap::new();
     if let Some(m) = measures.get("measures").and_then(|m| m.as_object()) {
         for (k, v) in m {
@@ -107,23 +106,25 @@ pub fn from_makehuman(dir: &Path) -> Result<Hm08Data, DataError> {
             let mut text = String::new();
             flate2::read::GzDecoder::new(&bytes[..])
                 .read_to_string(&mut text)
-                .map_err(|e| malformed(&file, e.to_string()))?;
+                .map_err(|e| DataError::malformed(&file, e.to_string()))?;
             let mut deltas = Vec::new();
             for line in text.lines().filter(|l| !l.starts_with('#') && !l.trim().is_empty()) {
                 let f: Vec<&str> = line.split_whitespace().collect();
                 if f.len() < 4 {
-                    return Err(malformed(&file, format!("bad line `{line}`")));
+                    return Err(DataError::malformed(&file, format!("bad line `{line}`")));
                 }
-                let v: usize = f[0].parse().map_err(|_| malformed(&file, format!("bad index in `{line}`")))?;
+                let v: usize =
+                    f[0].parse().map_err(|_| DataError::malformed(&file, format!("bad index in `{line}`")))?;
                 if v >= SKIN_VERTICES {
                     continue;
                 }
                 let mut d = [0i16; 3];
                 for k in 0..3 {
-                    let x: f64 = f[k + 1].parse().map_err(|_| malformed(&file, format!("bad delta in `{line}`")))?;
+                    let x: f64 =
+                        f[k + 1].parse().map_err(|_| DataError::malformed(&file, format!("bad delta in `{line}`")))?;
                     let q = fixed(x, DELTA_UNIT_DM, &file)?;
                     if q.abs() > f64::from(i16::MAX) {
-                        return Err(malformed(&file, format!("delta {x} out of range")));
+                        return Err(DataError::malformed(&file, format!("delta {x} out of range")));
                     }
                     d[k] = q as i16;
                 }
@@ -153,7 +154,7 @@ fn parse_obj(text: &str) -> Result<Obj, DataError> {
             Some("v") => {
                 let c: Vec<f64> = it.take(3).filter_map(|s| s.parse().ok()).collect();
                 let [x, y, z] = c[..] else {
-                    return Err(malformed("base.obj", format!("bad vertex line `{line}`")));
+                    return Err(DataError::malformed("base.obj", format!("bad vertex line `{line}`")));
                 };
                 obj.vertices.push([x, y, z]);
             }
@@ -164,7 +165,7 @@ fn parse_obj(text: &str) -> Result<Obj, DataError> {
                     .map(|i| i.saturating_sub(1))
                     .collect();
                 if ids.len() < 3 {
-                    return Err(malformed("base.obj", format!("bad face `{line}`")));
+                    return Err(DataError::malformed("base.obj", format!("bad face `{line}`")));
                 }
                 obj.faces.push((group.clone(), ids));
             }
@@ -199,11 +200,14 @@ pub fn obj_group(dir: &Path, group: &str) -> Result<(Vec<glam::DVec3>, Vec<[u32;
         }
     }
     if tris.is_empty() {
-        return Err(malformed("base.obj", format!("no faces in group `{group}`")));
+        return Err(DataError::malformed("base.obj", format!("no faces in group `{group}`")));
     }
     let mut positions = Vec::with_capacity(order.len());
     for i in order {
-        let c = obj.vertices.get(i).ok_or_else(|| malformed("base.obj", format!("face refers to vertex {i}")))?;
+        let c = obj
+            .vertices
+            .get(i)
+            .ok_or_else(|| DataError::malformed("base.obj", format!("face refers to vertex {i}")))?;
         positions.push(glam::DVec3::from_array(*c) * 0.1);
     }
     Ok((positions, tris))

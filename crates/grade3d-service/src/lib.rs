@@ -119,7 +119,7 @@ pub struct ServiceConfig {
     #[arg(long, env = "GRADE3D_MAX_PENDING_JOBS", default_value_t = 64)]
     pub max_pending_jobs: usize,
     /// Time limit of a synchronous request, seconds (fractions allowed; > 0).
-    #[arg(long, env = "GRADE3D_REQUEST_TIMEOUT_S", default_value_t = 120.0, value_parser = positive_seconds)]
+    #[arg(long, env = "GRADE3D_REQUEST_TIMEOUT_S", default_value_t = DEFAULT_REQUEST_TIMEOUT_S, value_parser = positive_seconds)]
     pub request_timeout_s: f64,
     /// How long the results of a scan are kept, seconds (0: not past the
     /// response that carries them).
@@ -133,6 +133,9 @@ pub struct ServiceConfig {
     pub no_gpu: bool,
 }
 
+/// `--request-timeout-s`'s default, seconds.
+const DEFAULT_REQUEST_TIMEOUT_S: f64 = 120.0;
+
 /// A time limit in seconds: finite and above 0.
 fn positive_seconds(text: &str) -> Result<f64, String> {
     match text.parse::<f64>() {
@@ -144,7 +147,10 @@ fn positive_seconds(text: &str) -> Result<f64, String> {
 impl ServiceConfig {
     /// The time limit of a synchronous request.
     pub fn request_timeout(&self) -> Duration {
-        Duration::try_from_secs_f64(self.request_timeout_s).unwrap_or(Duration::from_secs(120))
+        // the flag's parser keeps it finite and positive; a value set in code that is not
+        // falls back to the default
+        Duration::try_from_secs_f64(self.request_timeout_s)
+            .unwrap_or_else(|_| Duration::from_secs_f64(DEFAULT_REQUEST_TIMEOUT_S))
     }
 
     /// The defaults of `grade3d serve` with `data_dir`.
@@ -743,7 +749,8 @@ async fn grade_size_chart(
     let templates = resolve_templates(&s, &req.templates, field).await?;
     let chart = parse_chart(&s, &req.chart, req.figure)?;
     let created = parse_created(req.created.as_deref())?;
-    let canonical = canonical_json("size chart", &chart)?;
+    // an input that does not serialise is a 500, never hashed as "" (issue #16)
+    let canonical = work::json_bytes("size chart", &chart, false)?;
     let stamp = created.map(|c| c.to_rfc3339()).unwrap_or_default();
     let mut parts: Vec<&[u8]> =
         vec![b"size-chart", &canonical, req.base_size.as_deref().unwrap_or("").as_bytes(), stamp.as_bytes()];
@@ -950,7 +957,7 @@ async fn submit_job(
             )
         }
     };
-    let canonical = canonical_json("job", &spec)?;
+    let canonical = work::json_bytes("job", &spec, false)?;
     let mut parts: Vec<&[u8]> = vec![b"job", &canonical];
     parts.extend(templates.iter().map(|(_, json, _)| json.as_bytes()));
     let id = content_id(&parts);
@@ -982,13 +989,6 @@ async fn submit_job(
     s.0.metrics.jobs.with_label_values(&["queued"]).inc();
     let _ = s.0.job_tx.send(id);
     Ok((StatusCode::ACCEPTED, [(header::LOCATION, location)], Json(job_view(&s, &record))).into_response())
-}
-
-/// The bytes a result's content address is taken of. One that does not
-/// serialise is a 500 (issue #16: every such input hashed as the empty
-/// string, and so shared one address).
-fn canonical_json(what: &str, value: &impl Serialize) -> Result<Vec<u8>, Problem> {
-    Ok(work::json_bytes(what, value, false)?)
 }
 
 /// A reserved place among [`ServiceConfig::max_pending_jobs`]: given back

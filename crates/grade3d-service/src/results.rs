@@ -42,7 +42,6 @@ impl Stored {
 /// budget, each entry gone at its own expiry.
 #[derive(Debug)]
 pub struct ResultCache {
-    max_bytes: usize,
     entries: moka::sync::Cache<String, Arc<Stored>>,
 }
 
@@ -64,20 +63,20 @@ impl ResultCache {
             .eviction_policy(moka::policy::EvictionPolicy::lru())
             .expire_after(UntilExpiry)
             .build();
-        Self { max_bytes, entries }
+        Self { entries }
     }
 
     /// The live entry `id`, marked most recently used.
     pub fn get(&self, id: &str) -> Option<Arc<Stored>> {
-        // moka's expiry and this check agree; the check makes "expired" exact at the instant
-        self.entries.get(id).filter(|s| s.expires.is_none_or(|t| t > Instant::now()))
+        // moka checks the entry's expiry on every read
+        self.entries.get(id)
     }
 
     /// Stores `s` under `id` (replacing), evicting the least recently used
     /// past the budget; an entry larger than the budget is not kept.
     pub fn put(&self, id: String, s: Stored) -> Arc<Stored> {
         let s = Arc::new(s);
-        if s.bytes() > self.max_bytes {
+        if self.entries.policy().max_capacity().is_some_and(|budget| s.bytes() as u64 > budget) {
             self.entries.invalidate(&id);
         } else {
             self.entries.insert(id, Arc::clone(&s));

@@ -74,8 +74,11 @@ pub enum DataError {
     },
 }
 
-fn malformed(what: &str, detail: impl Into<String>) -> DataError {
-    DataError::Malformed { what: what.to_owned(), detail: detail.into() }
+impl DataError {
+    /// [`DataError::Malformed`] naming `what` (a file or section).
+    pub fn malformed(what: &str, detail: impl Into<String>) -> Self {
+        DataError::Malformed { what: what.to_owned(), detail: detail.into() }
+    }
 }
 
 struct Reader<'a> {
@@ -85,8 +88,11 @@ struct Reader<'a> {
 
 impl Reader<'_> {
     fn take(&mut self, n: usize) -> Result<&[u8], DataError> {
-        let end =
-            self.at.checked_add(n).filter(|&e| e <= self.b.len()).ok_or_else(|| malformed("hm08.bin", "truncated"))?;
+        let end = self
+            .at
+            .checked_add(n)
+            .filter(|&e| e <= self.b.len())
+            .ok_or_else(|| DataError::malformed("hm08.bin", "truncated"))?;
         let s = &self.b[self.at..end];
         self.at = end;
         Ok(s)
@@ -104,21 +110,23 @@ impl Reader<'_> {
     }
     fn name(&mut self) -> Result<String, DataError> {
         let n = self.u16()? as usize;
-        String::from_utf8(self.take(n)?.to_vec()).map_err(|_| malformed("hm08.bin", "name is not UTF-8"))
+        String::from_utf8(self.take(n)?.to_vec()).map_err(|_| DataError::malformed("hm08.bin", "name is not UTF-8"))
     }
 }
 
 /// Decodes the gzip-compressed binary.
 pub fn decode(gz: &[u8]) -> Result<Hm08Data, DataError> {
     let mut raw = Vec::new();
-    flate2::read::GzDecoder::new(gz).read_to_end(&mut raw).map_err(|e| malformed("hm08.bin.gz", e.to_string()))?;
+    flate2::read::GzDecoder::new(gz)
+        .read_to_end(&mut raw)
+        .map_err(|e| DataError::malformed("hm08.bin.gz", e.to_string()))?;
     let mut r = Reader { b: &raw, at: 0 };
     if r.take(8)? != MAGIC {
-        return Err(malformed("hm08.bin", "bad magic"));
+        return Err(DataError::malformed("hm08.bin", "bad magic"));
     }
     let version = r.u32()?;
     if version != FORMAT_VERSION {
-        return Err(malformed("hm08.bin", format!("version {version}, expected {FORMAT_VERSION}")));
+        return Err(DataError::malformed("hm08.bin", format!("version {version}, expected {FORMAT_VERSION}")));
     }
     let nv = r.u32()? as usize;
     let mut positions = Vec::with_capacity(nv.min(1 << 20));
@@ -130,7 +138,7 @@ pub fn decode(gz: &[u8]) -> Result<Hm08Data, DataError> {
     for _ in 0..nt {
         let t = [r.u16()?, r.u16()?, r.u16()?];
         if t.iter().any(|&v| v as usize >= nv) {
-            return Err(malformed("hm08.bin", "triangle index out of range"));
+            return Err(DataError::malformed("hm08.bin", "triangle index out of range"));
         }
         triangles.push(t);
     }
@@ -159,7 +167,7 @@ pub fn decode(gz: &[u8]) -> Result<Hm08Data, DataError> {
         for _ in 0..n {
             prev = prev.wrapping_add(r.u16()?);
             if prev as usize >= nv {
-                return Err(malformed("hm08.bin", format!("target {name} moves vertex {prev}")));
+                return Err(DataError::malformed("hm08.bin", format!("target {name} moves vertex {prev}")));
             }
             ids.push(prev);
         }

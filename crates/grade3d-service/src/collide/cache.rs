@@ -68,7 +68,6 @@ impl Default for ObstacleCacheOptions {
 #[derive(Debug)]
 pub struct ObstacleCache {
     entries: moka::sync::Cache<BodyKey, Arc<Obstacle>>,
-    capacity: usize,
     hits: AtomicU64,
     misses: AtomicU64,
 }
@@ -80,7 +79,7 @@ impl ObstacleCache {
             .max_capacity(opts.capacity as u64)
             .eviction_policy(moka::policy::EvictionPolicy::lru())
             .build();
-        Self { entries, capacity: opts.capacity, hits: AtomicU64::new(0), misses: AtomicU64::new(0) }
+        Self { entries, hits: AtomicU64::new(0), misses: AtomicU64::new(0) }
     }
 
     /// The cached obstacle of `key`, or `build()`'s, inserted.
@@ -92,21 +91,25 @@ impl ObstacleCache {
         key: BodyKey,
         build: impl FnOnce() -> Result<Obstacle, E>,
     ) -> Result<Arc<Obstacle>, E> {
-        if let Some(hit) = self.entries.get(&key) {
-            self.hits.fetch_add(1, Ordering::Relaxed);
-            return Ok(hit);
-        }
-        self.misses.fetch_add(1, Ordering::Relaxed);
-        if self.capacity == 0 {
+        if self.entries.policy().max_capacity() == Some(0) {
+            self.misses.fetch_add(1, Ordering::Relaxed);
             return build().map(Arc::new);
         }
-        let built = self
+        // one lookup: the entry is fresh when this call built it (a concurrent miss of the
+        // same body waits for that build and is served from it)
+        let entry = self
             .entries
-            .try_get_with(key, || build().map(Arc::new))
+            .entry(key)
+            .or_try_insert_with(|| build().map(Arc::new))
             .map_err(|e| Arc::try_unwrap(e).unwrap_or_else(|shared| (*shared).clone()))?;
-        // evict now, not at the next housekeeping: the capacity bounds memory
-        self.entries.run_pending_tasks();
-        Ok(built)
+        if entry.is_fresh() {
+            self.misses.fetch_add(1, Ordering::Relaxed);
+            // evict now, not at the next housekeeping: the capacity bounds memory
+            self.entries.run_pending_tasks();
+        } else {
+            self.hits.fetch_add(1, Ordering::Relaxed);
+        }
+        Ok(entry.into_value())
     }
 
     /// Lookups served from the cache.
