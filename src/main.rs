@@ -56,6 +56,9 @@ enum Command {
         #[arg(long)]
         plain: bool,
     },
+    /// Print the service's OpenAPI document (YAML), generated from its router and types:
+    /// what `openapi.yaml` holds (`grade3d openapi > openapi.yaml`).
+    Openapi,
     /// Grade every built-in template on the reference body and write each panel as OBJ
     /// (the inputs of `benches/peer_flatten.py`).
     Panels {
@@ -145,6 +148,7 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
         Command::Grade(args) => grade_offline(&args)?,
         Command::Flatten { panel, json: _, plain } => flatten_panel(&panel, plain)?,
         Command::Panels { dir } => write_panels(&dir)?,
+        Command::Openapi => print!("{}", grade3d::service::api::openapi_yaml()?),
         Command::Measure { body, landmarks } => measure_body(&body, &landmarks)?,
     }
     Ok(())

@@ -19,4 +19,5 @@ pub mod mannequin;
 pub mod pattern;
 pub mod pipeline;
 pub mod refine;
+pub mod report;
 pub mod template;

@@ -21,26 +21,28 @@ fn db<E: std::fmt::Display>(e: E) -> StoreError {
 }
 
 /// A body of a batch job.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct JobBody {
-    /// Its name: the size label of its results.
+    /// Its name: the size label of its results (1–64 characters of A–Z a–z 0–9 - _ .).
     pub name: String,
     /// The scan, GLB, base64 (standard alphabet). Emptied when the job ends.
     #[serde(default)]
     pub glb_base64: String,
     /// Its landmarks document.
+    #[schema(value_type = Object)]
     pub landmarks: serde_json::Value,
 }
 
-/// What a job grades: a size chart or bodies, times templates.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// What a job grades: exactly one of a size chart and bodies, times templates.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(deny_unknown_fields)]
 pub struct JobSpec {
     /// Template names (the live version at submission is recorded in `versions`).
     pub templates: Vec<String>,
     /// A size chart: a JSON chart object or CSV text.
     #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[schema(value_type = Option<crate::api::SizeChartInput>)]
     pub size_chart: Option<serde_json::Value>,
     /// Bodies (scans with landmarks).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -50,11 +52,12 @@ pub struct JobSpec {
     pub base_size: Option<String>,
     /// The `.RUL` files' creation stamp, RFC 3339 (default: when the job runs).
     #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[schema(format = DateTime)]
     pub created: Option<String>,
 }
 
 /// Where a job is.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum JobState {
     /// Accepted, waiting.

@@ -3,8 +3,8 @@
 //! ([`errors`]) and serialise; the flows themselves are plain functions
 //! ([`work`]). [`app`] builds the router and is testable with `oneshot`.
 //!
-//! Routes (every one is in `openapi.yaml`; [`ROUTES`] is the list the
-//! contract test compares with it):
+//! Routes (every one is registered through [`routes`], which also makes
+//! the OpenAPI document: [`api`], committed as `openapi.yaml`):
 //! - `GET /healthz`, `GET /readyz`, `GET /metrics`
 //! - `GET|POST /v1/templates`, `GET|PUT|DELETE /v1/templates/{name}`
 //! - `POST /v1/grade/size-chart` (JSON or CSV), `POST /v1/grade/scan` (multipart)
@@ -19,6 +19,7 @@
 use grade3d_core::{body, geom, mannequin, pattern, pipeline, refine, template};
 use grade3d_io as io;
 
+pub mod api;
 pub mod collide;
 
 use std::path::PathBuf;
@@ -30,11 +31,14 @@ use axum::extract::{FromRequest, MatchedPath, Multipart, Path, Query, Request, S
 use axum::http::{header, HeaderMap, HeaderValue, StatusCode};
 use axum::middleware::{self, Next};
 use axum::response::{IntoResponse, Response};
-use axum::routing::get;
 use axum::{Json, Router};
 use base64::Engine;
-use serde::{Deserialize, Serialize};
+use utoipa_axum::router::OpenApiRouter;
+use utoipa_axum::routes;
 
+use crate::api::{
+    ArtefactLink, GradeResult, JobProgress, JobView, Ready, SizeChartQuery, SizeChartRequest, VersionQuery,
+};
 use crate::collide::cache::{ObstacleCache, ObstacleCacheOptions};
 use crate::collide::render::GpuContext;
 use crate::mannequin::size_chart::{parse_csv, parse_json, FigureType, SizeChart, SizeChartOptions};
@@ -46,6 +50,7 @@ pub mod jobs;
 pub mod metrics;
 pub mod pool;
 pub mod problem;
+pub mod report;
 pub mod results;
 pub mod store;
 pub mod work;
@@ -57,25 +62,6 @@ use problem::Problem;
 use results::{content_id, ResultCache, Stored};
 use store::TemplateStore;
 use work::{Artefact, BodyInput, Outcome, WorkContext, WorkOptions};
-
-/// Every route: (method, path template as in `openapi.yaml`).
-pub const ROUTES: &[(&str, &str)] = &[
-    ("GET", "/healthz"),
-    ("GET", "/readyz"),
-    ("GET", "/metrics"),
-    ("GET", "/v1/templates"),
-    ("POST", "/v1/templates"),
-    ("GET", "/v1/templates/{name}"),
-    ("PUT", "/v1/templates/{name}"),
-    ("DELETE", "/v1/templates/{name}"),
-    ("POST", "/v1/grade/size-chart"),
-    ("POST", "/v1/grade/scan"),
-    ("GET", "/v1/results/{id}"),
-    ("GET", "/v1/results/{id}/{artefact}"),
-    ("POST", "/v1/jobs"),
-    ("GET", "/v1/jobs/{id}"),
-    ("GET", "/v1/jobs/{id}/artefacts/{artefact}"),
-];
 
 /// The service's configuration: flags of `grade3d serve`, each also read
 /// from the environment variable named.
@@ -314,21 +300,28 @@ fn not_ready() -> Problem {
     p
 }
 
-/// The service's router.
+/// Every route with its OpenAPI operation: the one list both the router
+/// ([`app`]) and the contract ([`api::openapi`]) are made from.
+pub fn routes() -> OpenApiRouter<AppState> {
+    OpenApiRouter::with_openapi(<api::ApiDoc as utoipa::OpenApi>::openapi())
+        .routes(routes!(healthz))
+        .routes(routes!(readyz))
+        .routes(routes!(metrics_text))
+        .routes(routes!(list_templates, create_template))
+        .routes(routes!(get_template, replace_template, delete_template))
+        .routes(routes!(grade_size_chart))
+        .routes(routes!(grade_scan))
+        .routes(routes!(get_result))
+        .routes(routes!(get_result_artefact))
+        .routes(routes!(submit_job))
+        .routes(routes!(get_job))
+        .routes(routes!(get_job_artefact))
+}
+
+/// The service's router: [`routes`] with the fallbacks and the layers.
 pub fn app(state: AppState) -> Router {
-    Router::new()
-        .route("/healthz", get(|| async { "ok" }))
-        .route("/readyz", get(readyz))
-        .route("/metrics", get(metrics_text))
-        .route("/v1/templates", get(list_templates).post(create_template))
-        .route("/v1/templates/{name}", get(get_template).put(replace_template).delete(delete_template))
-        .route("/v1/grade/size-chart", axum::routing::post(grade_size_chart))
-        .route("/v1/grade/scan", axum::routing::post(grade_scan))
-        .route("/v1/results/{id}", get(get_result))
-        .route("/v1/results/{id}/{artefact}", get(get_result_artefact))
-        .route("/v1/jobs", axum::routing::post(submit_job))
-        .route("/v1/jobs/{id}", get(get_job))
-        .route("/v1/jobs/{id}/artefacts/{artefact}", get(get_job_artefact))
+    let (router, _) = routes().split_for_parts();
+    router
         .fallback(|| async { Problem::not_found("no such route") })
         .method_not_allowed_fallback(|| async {
             Problem::new(StatusCode::METHOD_NOT_ALLOWED, "method-not-allowed", "Method not allowed", "see openapi.yaml")
@@ -365,17 +358,36 @@ async fn observe(State(s): State<AppState>, req: Request, next: Next) -> Respons
     resp
 }
 
-async fn readyz(State(s): State<AppState>) -> Result<Json<serde_json::Value>, Problem> {
+/// Liveness: the process answers.
+#[utoipa::path(get, path = "/healthz", tag = "operations", operation_id = "healthz",
+    responses((status = 200, description = "The process answers.", body = String, content_type = "text/plain", example = "ok")))]
+async fn healthz() -> &'static str {
+    "ok"
+}
+
+/// Readiness: the wgpu adapter's start-up ended and the template library is loaded.
+#[utoipa::path(get, path = "/readyz", tag = "operations", operation_id = "readyz",
+    responses(
+        (status = 200, description = "Ready.", body = Ready),
+        (status = 503, response = api::Unavailable),
+        (status = 500, response = api::Internal),
+    ))]
+async fn readyz(State(s): State<AppState>) -> Result<Json<Ready>, Problem> {
     let gpu = s.0.gpu.get().ok_or_else(not_ready)?;
     let me = s.clone();
     let templates = off_executor(move || Ok(me.0.store.list()?.len())).await?;
-    Ok(Json(serde_json::json!({
-        "ready": true,
-        "templates": templates,
-        "gpu": gpu.as_ref().map(|g| format!("{} ({:?})", g.adapter().name, g.adapter().backend)),
-    })))
+    Ok(Json(Ready {
+        ready: true,
+        templates,
+        gpu: gpu.as_ref().map(|g| format!("{} ({:?})", g.adapter().name, g.adapter().backend)),
+    }))
 }
 
+/// Prometheus metrics (text exposition format 0.0.4).
+///
+/// Requests, latency histograms, stage times, queue depth, cache lookups, jobs.
+#[utoipa::path(get, path = "/metrics", tag = "operations", operation_id = "metrics",
+    responses((status = 200, description = "The metrics.", body = String, content_type = "text/plain")))]
 async fn metrics_text(State(s): State<AppState>) -> Response {
     let m = &s.0.metrics;
     m.queue_depth.set(s.0.pool.depth() as i64);
@@ -525,17 +537,33 @@ fn resolve_templates_now(s: &AppState, names: &[String], field: &str) -> Result<
 
 // --- templates -----------------------------------------------------------------------------
 
+/// Live templates and their versions.
+#[utoipa::path(get, path = "/v1/templates", tag = "templates", operation_id = "listTemplates",
+    security((), ("apiKey" = [])),
+    responses(
+        (status = 200, description = "Every live template.", body = Vec<store::Entry>),
+        (status = 401, response = api::Unauthorized),
+        (status = 403, response = api::Forbidden),
+        (status = 500, response = api::Internal),
+    ))]
 async fn list_templates(State(s): State<AppState>, headers: HeaderMap) -> Result<Json<Vec<store::Entry>>, Problem> {
     check_key(&s, &headers, false)?;
     Ok(Json(off_executor(move || Ok(s.0.store.list()?)).await?))
 }
 
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct VersionQuery {
-    version: Option<u32>,
-}
-
+/// A template document: the live version, or `version`.
+#[utoipa::path(get, path = "/v1/templates/{name}", tag = "templates", operation_id = "getTemplate",
+    security((), ("apiKey" = [])),
+    params(("name" = String, Path, description = "The template's name."), VersionQuery),
+    responses(
+        (status = 200, description = "The template document (its JSON Schema: `templates/schema/garment-template.schema.json`).",
+            body = Object, headers(("x-template-version" = String, description = "The version answered."))),
+        (status = 400, response = api::BadRequest),
+        (status = 401, response = api::Unauthorized),
+        (status = 403, response = api::Forbidden),
+        (status = 404, response = api::NotFound),
+        (status = 500, response = api::Internal),
+    ))]
 async fn get_template(
     State(s): State<AppState>,
     headers: HeaderMap,
@@ -553,6 +581,23 @@ async fn get_template(
     Ok(resp)
 }
 
+/// Create a template (version 1).
+#[utoipa::path(post, path = "/v1/templates", tag = "templates", operation_id = "createTemplate",
+    security(("apiKey" = [])),
+    request_body(content = Object, content_type = "application/json",
+        description = "A garment feature template document (`templates/schema/garment-template.schema.json`): nodes by Eq. (1) of Wang, Wang & Yuen, edges with profiles, faces, panels, seams, darts, notches, grain lines, defaults."),
+    responses(
+        (status = 201, description = "Created, durably.", body = store::Entry,
+            headers(("Location" = String, description = "/v1/templates/{name}"))),
+        (status = 400, response = api::BadRequest),
+        (status = 401, response = api::Unauthorized),
+        (status = 403, response = api::Forbidden),
+        (status = 409, response = api::Conflict),
+        (status = 413, response = api::TooLarge),
+        (status = 422, response = api::Unprocessable),
+        (status = 503, response = api::Unavailable),
+        (status = 500, response = api::Internal),
+    ))]
 async fn create_template(
     State(s): State<AppState>,
     headers: HeaderMap,
@@ -569,6 +614,23 @@ async fn create_template(
     Ok((StatusCode::CREATED, [(header::LOCATION, location)], Json(entry)).into_response())
 }
 
+/// Replace a template (a new version; earlier versions stay readable).
+#[utoipa::path(put, path = "/v1/templates/{name}", tag = "templates", operation_id = "replaceTemplate",
+    security(("apiKey" = [])),
+    params(("name" = String, Path, description = "The template's name.")),
+    request_body(content = Object, content_type = "application/json",
+        description = "The new template document (`templates/schema/garment-template.schema.json`)."),
+    responses(
+        (status = 200, description = "The new live version, written durably.", body = store::Entry),
+        (status = 400, response = api::BadRequest),
+        (status = 401, response = api::Unauthorized),
+        (status = 403, response = api::Forbidden),
+        (status = 404, response = api::NotFound),
+        (status = 413, response = api::TooLarge),
+        (status = 422, response = api::Unprocessable),
+        (status = 503, response = api::Unavailable),
+        (status = 500, response = api::Internal),
+    ))]
 async fn replace_template(
     State(s): State<AppState>,
     headers: HeaderMap,
@@ -584,6 +646,17 @@ async fn replace_template(
     Ok(Json(s.0.pool.run(limit, move || me.0.store.put(Some(&name), &text, false)).await??))
 }
 
+/// Delete a template (its versions stay readable by number).
+#[utoipa::path(delete, path = "/v1/templates/{name}", tag = "templates", operation_id = "deleteTemplate",
+    security(("apiKey" = [])),
+    params(("name" = String, Path, description = "The template's name.")),
+    responses(
+        (status = 204, description = "Deleted."),
+        (status = 401, response = api::Unauthorized),
+        (status = 403, response = api::Forbidden),
+        (status = 404, response = api::NotFound),
+        (status = 500, response = api::Internal),
+    ))]
 async fn delete_template(
     State(s): State<AppState>,
     headers: HeaderMap,
@@ -596,40 +669,31 @@ async fn delete_template(
 
 // --- the grading flows ---------------------------------------------------------------------
 
-/// The JSON answered by the grading flows and `GET /v1/results/{id}`.
-#[derive(Debug, Serialize)]
-struct ArtefactLink {
-    name: String,
-    media_type: String,
-    bytes: usize,
-    href: String,
-}
-
 fn links(base: &str, artefacts: impl Iterator<Item = (String, String, usize)>) -> Vec<ArtefactLink> {
     artefacts
         .map(|(name, media_type, bytes)| ArtefactLink { href: format!("{base}/{name}"), name, media_type, bytes })
         .collect()
 }
 
-fn summary(id: &str, flow: &str, outcome: &Outcome, expires_s: Option<u64>) -> serde_json::Value {
+fn summary(id: &str, flow: &str, outcome: &Outcome, expires_s: Option<u64>) -> GradeResult {
     let base = format!("/v1/results/{id}");
-    serde_json::json!({
-        "id": id,
-        "flow": flow,
-        "href": base,
-        "expires_in_s": expires_s,
-        "report": outcome.report,
-        "timings_ms": outcome.timings,
-        "artefacts": links(&base, outcome.artefacts.iter().map(|a| (a.name.clone(), a.media_type.to_owned(), a.bytes.len()))),
-    })
+    GradeResult {
+        id: id.to_owned(),
+        flow: flow.to_owned(),
+        artefacts: links(
+            &base,
+            outcome.artefacts.iter().map(|a| (a.name.clone(), a.media_type.to_owned(), a.bytes.len())),
+        ),
+        href: base,
+        expires_in_s: expires_s,
+        report: outcome.report.clone(),
+        timings_ms: outcome.timings.clone(),
+        cached: false,
+    }
 }
 
 fn answer(stored: &Stored, cached: bool) -> Response {
-    let mut v = stored.summary.clone();
-    if let Some(o) = v.as_object_mut() {
-        o.insert("cached".into(), cached.into());
-    }
-    Json(v).into_response()
+    Json(GradeResult { cached, ..stored.summary.clone() }).into_response()
 }
 
 /// Runs a flow on the pool, stores its outcome under `id` and answers it.
@@ -653,30 +717,6 @@ async fn run_flow(
     let summary = summary(&id, flow, &outcome, ttl.map(|t| t.as_secs()));
     let stored = s.0.results.put(id, Stored { summary, artefacts: outcome.artefacts, expires });
     Ok(answer(&stored, false))
-}
-
-/// Body of `POST /v1/grade/size-chart` as JSON.
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct SizeChartRequest {
-    templates: Vec<String>,
-    chart: serde_json::Value,
-    #[serde(default)]
-    base_size: Option<String>,
-    #[serde(default)]
-    figure: Option<FigureType>,
-    #[serde(default)]
-    created: Option<String>,
-}
-
-/// Query of `POST /v1/grade/size-chart` with a CSV body.
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct SizeChartQuery {
-    templates: Option<String>,
-    base_size: Option<String>,
-    figure: Option<FigureType>,
-    created: Option<String>,
 }
 
 /// The `.RUL` creation stamp of a flow: the request's `created` (RFC 3339),
@@ -717,6 +757,36 @@ fn media_is(headers: &HeaderMap, what: &str) -> bool {
         .is_some_and(|v| v.split(';').next().is_some_and(|m| m.trim().eq_ignore_ascii_case(what)))
 }
 
+/// Retailer flow: a size chart and templates to graded results for every size.
+///
+/// One mannequin per size (the embedded MakeHuman model fitted to the row),
+/// every template graded on every size: per-size garment GLB, pattern
+/// SVG/DXF/JSON; per template the graded nest (SVG, DXF with grade rules)
+/// and grade rules (CSV, .RUL); the fit report. Send JSON, or the CSV chart
+/// itself as `text/csv` with the templates in the query. Results are
+/// content-addressed and cached.
+#[utoipa::path(post, path = "/v1/grade/size-chart", tag = "grading", operation_id = "gradeSizeChart",
+    security((), ("apiKey" = [])),
+    params(SizeChartQuery),
+    request_body(content(
+        (SizeChartRequest = "application/json", example = json!({
+            "templates": ["straight-skirt"], "base_size": "M",
+            "chart": {"unit": "cm", "sizes": [
+                {"size": "S", "measurements": {"bust_girth": 86, "waist_girth": 68, "hip_girth": 94}},
+                {"size": "M", "measurements": {"bust_girth": 92, "waist_girth": 74, "hip_girth": 100}}]}})),
+        (String = "text/csv", example = json!("size,unit,bust_girth,waist_girth_curvy\n8,in,35.5,28.375\n10,in,36.5,29.375\n")),
+    )),
+    responses(
+        (status = 200, description = "The graded result (served from the cache when `cached`).", body = GradeResult),
+        (status = 400, response = api::BadRequest),
+        (status = 401, response = api::Unauthorized),
+        (status = 403, response = api::Forbidden),
+        (status = 413, response = api::TooLarge),
+        (status = 415, response = api::UnsupportedMedia),
+        (status = 422, response = api::Unprocessable),
+        (status = 503, response = api::Unavailable),
+        (status = 500, response = api::Internal),
+    ))]
 async fn grade_size_chart(
     State(s): State<AppState>,
     headers: HeaderMap,
@@ -774,6 +844,25 @@ fn unsupported_media(what: &str) -> Problem {
     .field("Content-Type")
 }
 
+/// Web front-end flow: a body scan with landmarks and templates to a graded garment.
+///
+/// Answers the garment GLB (vertex attribute `_EASE_MM`: distance to the
+/// body), the pattern as SVG, DXF and JSON, and the report. Scans are never
+/// logged nor stored; their results are forgotten after the scan TTL.
+#[utoipa::path(post, path = "/v1/grade/scan", tag = "grading", operation_id = "gradeScan",
+    security((), ("apiKey" = [])),
+    request_body(content = api::ScanUpload, content_type = "multipart/form-data"),
+    responses(
+        (status = 200, description = "The graded result (served from the cache when `cached`).", body = GradeResult),
+        (status = 400, response = api::BadRequest),
+        (status = 401, response = api::Unauthorized),
+        (status = 403, response = api::Forbidden),
+        (status = 413, response = api::TooLarge),
+        (status = 415, response = api::UnsupportedMedia),
+        (status = 422, response = api::Unprocessable),
+        (status = 503, response = api::Unavailable),
+        (status = 500, response = api::Internal),
+    ))]
 async fn grade_scan(State(s): State<AppState>, headers: HeaderMap, req: Request) -> Result<Response, Problem> {
     check_key(&s, &headers, false)?;
     if !media_is(&headers, "multipart/form-data") {
@@ -843,6 +932,17 @@ fn stored_result(s: &AppState, id: &str) -> Result<Arc<Stored>, Problem> {
     s.0.results.get(id).ok_or_else(|| Problem::not_found(format!("no result `{id}` (results expire)")))
 }
 
+/// A cached grading result.
+#[utoipa::path(get, path = "/v1/results/{id}", tag = "grading", operation_id = "getResult",
+    security((), ("apiKey" = [])),
+    params(("id" = String, Path, description = "The result's content address.")),
+    responses(
+        (status = 200, description = "The result.", body = GradeResult),
+        (status = 401, response = api::Unauthorized),
+        (status = 403, response = api::Forbidden),
+        (status = 404, response = api::NotFound),
+        (status = 500, response = api::Internal),
+    ))]
 async fn get_result(
     State(s): State<AppState>,
     headers: HeaderMap,
@@ -853,8 +953,15 @@ async fn get_result(
     Ok(answer(&stored, true))
 }
 
-fn artefact_response(name: &str, media_type: &str, bytes: Vec<u8>) -> Response {
+/// An artefact's bytes as a download: its own media type, or
+/// `application/octet-stream` when the request accepts only that
+/// (module docs of [`api`]).
+fn artefact_response(headers: &HeaderMap, name: &str, media_type: &str, bytes: Vec<u8>) -> Response {
     let disposition = format!("attachment; filename=\"{name}\"");
+    let octets = headers.get(header::ACCEPT).and_then(|v| v.to_str().ok()).is_some_and(|v| {
+        v.split(';').next().is_some_and(|m| m.trim().eq_ignore_ascii_case("application/octet-stream"))
+    });
+    let media_type = if octets { "application/octet-stream" } else { media_type };
     let mut resp = bytes.into_response();
     let h = resp.headers_mut();
     if let Ok(v) = HeaderValue::from_str(media_type) {
@@ -866,6 +973,21 @@ fn artefact_response(name: &str, media_type: &str, bytes: Vec<u8>) -> Response {
     resp
 }
 
+/// One artefact of a cached result.
+#[utoipa::path(get, path = "/v1/results/{id}/{artefact}", tag = "grading", operation_id = "getResultArtefact",
+    security((), ("apiKey" = [])),
+    params(
+        ("id" = String, Path, description = "The result's content address."),
+        ("artefact" = String, Path, pattern = r"^(report\.json|[A-Za-z0-9._-]+\.(pattern\.svg|pattern\.dxf|pattern\.accumark\.dxf|pattern\.json|garment\.glb|nest\.svg|nest\.dxf|nest\.accumark\.dxf|nest\.rul|rules\.csv))$",
+            description = "File name: `{template}-{size}.pattern.svg|.pattern.dxf|.pattern.accumark.dxf|.pattern.json|.garment.glb`, `{template}.nest.svg|.nest.dxf|.nest.accumark.dxf|.nest.rul|.rules.csv`, `report.json`."),
+    ),
+    responses(
+        (status = 200, response = api::ArtefactBytes),
+        (status = 401, response = api::Unauthorized),
+        (status = 403, response = api::Forbidden),
+        (status = 404, response = api::NotFound),
+        (status = 500, response = api::Internal),
+    ))]
 async fn get_result_artefact(
     State(s): State<AppState>,
     headers: HeaderMap,
@@ -878,12 +1000,12 @@ async fn get_result_artefact(
         .iter()
         .find(|a| a.name == name)
         .ok_or_else(|| Problem::not_found(format!("result `{id}` has no artefact `{name}`")).field("artefact"))?;
-    Ok(artefact_response(&a.name, a.media_type, a.bytes.clone()))
+    Ok(artefact_response(&headers, &a.name, a.media_type, a.bytes.clone()))
 }
 
 // --- batch jobs ----------------------------------------------------------------------------
 
-fn job_view(s: &AppState, r: &JobRecord) -> serde_json::Value {
+fn job_view(s: &AppState, r: &JobRecord) -> JobView {
     let base = format!("/v1/jobs/{}", r.id);
     let progress = s.0.progress.lock().unwrap_or_else(|p| p.into_inner()).get(&r.id).cloned();
     let units = r.units.max(1);
@@ -894,19 +1016,47 @@ fn job_view(s: &AppState, r: &JobRecord) -> serde_json::Value {
         (JobState::Running, None) => ("running".to_owned(), 0, units),
         (_, None) => ("queued".to_owned(), 0, units),
     };
-    serde_json::json!({
-        "id": r.id,
-        "href": base,
-        "state": r.state,
-        "progress": {"stage": stage, "done": done, "total": total},
-        "templates": r.versions.iter().map(|(n, v)| serde_json::json!({"name": n, "version": v})).collect::<Vec<_>>(),
-        "error": r.error,
-        "report": r.report,
-        "timings_ms": r.timings_ms,
-        "artefacts": links(&format!("{base}/artefacts"), r.artefacts.iter().map(|a| (a.name.clone(), a.media_type.clone(), a.bytes))),
-    })
+    JobView {
+        id: r.id.clone(),
+        artefacts: links(
+            &format!("{base}/artefacts"),
+            r.artefacts.iter().map(|a| (a.name.clone(), a.media_type.clone(), a.bytes)),
+        ),
+        href: base,
+        state: r.state,
+        progress: JobProgress { stage, done, total },
+        templates: r.versions.iter().map(|(n, v)| store::Entry { name: n.clone(), version: *v }).collect(),
+        error: r.error.clone(),
+        report: r.report.clone(),
+        timings_ms: r.timings_ms.clone(),
+    }
 }
 
+/// Manufacturer flow: a batch job (a size chart or bodies, times templates).
+///
+/// Accepted with 202 once written durably; the job's id is the content
+/// address of its inputs (the same request is the same job, and its
+/// artefacts are byte-identical run to run). Poll the job URL for
+/// progress, then download the artefacts.
+#[utoipa::path(post, path = "/v1/jobs", tag = "jobs", operation_id = "submitJob",
+    security((), ("apiKey" = [])),
+    request_body(content = JobSpec, content_type = "application/json", example = json!({
+        "templates": ["straight-skirt", "trousers"], "base_size": "M",
+        "size_chart": {"unit": "cm", "sizes": [
+            {"size": "S", "measurements": {"bust_girth": 86, "waist_girth": 68, "hip_girth": 94}},
+            {"size": "M", "measurements": {"bust_girth": 92, "waist_girth": 74, "hip_girth": 100}}]}})),
+    responses(
+        (status = 202, description = "Accepted (or the same job, already accepted).", body = JobView,
+            headers(("Location" = String, description = "/v1/jobs/{id}"))),
+        (status = 400, response = api::BadRequest),
+        (status = 401, response = api::Unauthorized),
+        (status = 403, response = api::Forbidden),
+        (status = 413, response = api::TooLarge),
+        (status = 415, response = api::UnsupportedMedia),
+        (status = 422, response = api::Unprocessable),
+        (status = 503, response = api::Unavailable),
+        (status = 500, response = api::Internal),
+    ))]
 async fn submit_job(
     State(s): State<AppState>,
     headers: HeaderMap,
@@ -1111,12 +1261,38 @@ async fn job(s: &AppState, id: &str) -> Result<JobRecord, Problem> {
     off_executor(move || Ok(me.0.jobs.get(&key)?)).await?.ok_or_else(|| Problem::not_found(format!("no job `{id}`")))
 }
 
+/// A job's state, progress, report and artefacts.
+#[utoipa::path(get, path = "/v1/jobs/{id}", tag = "jobs", operation_id = "getJob",
+    security((), ("apiKey" = [])),
+    params(("id" = String, Path, description = "The job's content address.")),
+    responses(
+        (status = 200, description = "The job.", body = JobView),
+        (status = 401, response = api::Unauthorized),
+        (status = 403, response = api::Forbidden),
+        (status = 404, response = api::NotFound),
+        (status = 500, response = api::Internal),
+    ))]
 async fn get_job(State(s): State<AppState>, headers: HeaderMap, Path(id): Path<String>) -> Result<Response, Problem> {
     check_key(&s, &headers, false)?;
     let r = job(&s, &id).await?;
     Ok(Json(job_view(&s, &r)).into_response())
 }
 
+/// One artefact of a finished job.
+#[utoipa::path(get, path = "/v1/jobs/{id}/artefacts/{artefact}", tag = "jobs", operation_id = "getJobArtefact",
+    security((), ("apiKey" = [])),
+    params(
+        ("id" = String, Path, description = "The job's content address."),
+        ("artefact" = String, Path, pattern = r"^(report\.json|[A-Za-z0-9._-]+\.(pattern\.svg|pattern\.dxf|pattern\.accumark\.dxf|pattern\.json|garment\.glb|nest\.svg|nest\.dxf|nest\.accumark\.dxf|nest\.rul|rules\.csv))$",
+            description = "File name, as for `getResultArtefact`."),
+    ),
+    responses(
+        (status = 200, response = api::ArtefactBytes),
+        (status = 401, response = api::Unauthorized),
+        (status = 403, response = api::Forbidden),
+        (status = 404, response = api::NotFound),
+        (status = 500, response = api::Internal),
+    ))]
 async fn get_job_artefact(
     State(s): State<AppState>,
     headers: HeaderMap,
@@ -1133,7 +1309,7 @@ async fn get_job_artefact(
     let bytes = off_executor(move || Ok(me.0.jobs.artefact(&key, &file)?))
         .await?
         .ok_or_else(|| Problem::not_found("artefact missing"))?;
-    Ok(artefact_response(&entry.name, &entry.media_type, bytes))
+    Ok(artefact_response(&headers, &entry.name, &entry.media_type, bytes))
 }
 
 #[cfg(test)]
@@ -1141,6 +1317,7 @@ mod tests {
     use super::*;
     use axum::body::Body;
     use axum::http::Request;
+    use http_body_util::BodyExt;
     use tower::ServiceExt;
 
     fn state() -> (AppState, PathBuf) {
@@ -1173,6 +1350,47 @@ mod tests {
         let _ = std::fs::remove_dir_all(dir);
     }
 
+    /// Router coverage (issue #16): every operation of the generated
+    /// document reaches a handler of [`app`] (neither the unknown-route
+    /// fallback nor 405), and [`app`] registers no route outside
+    /// [`routes`], the list the document is made from.
+    #[tokio::test]
+    async fn every_documented_operation_is_routed_and_every_route_documented() {
+        let (s, dir) = state();
+        let doc = api::openapi();
+        let mut operations = 0;
+        for (path, item) in &doc.paths.paths {
+            let methods = [
+                ("GET", item.get.is_some()),
+                ("POST", item.post.is_some()),
+                ("PUT", item.put.is_some()),
+                ("DELETE", item.delete.is_some()),
+                ("PATCH", item.patch.is_some()),
+            ];
+            for (method, _) in methods.iter().filter(|m| m.1) {
+                operations += 1;
+                let uri = path
+                    .replace("{name}", "no-such-template")
+                    .replace("{id}", "0")
+                    .replace("{artefact}", "report.json");
+                let req = Request::builder().method(*method).uri(&uri).body(Body::empty()).unwrap();
+                let resp = app(s.clone()).oneshot(req).await.unwrap();
+                assert_ne!(resp.status(), StatusCode::METHOD_NOT_ALLOWED, "{method} {path}");
+                let body = resp.into_body().collect().await.unwrap().to_bytes();
+                let text = String::from_utf8_lossy(&body);
+                assert!(!text.contains("no such route"), "{method} {path} is documented but not routed: {text}");
+            }
+        }
+        assert_eq!(operations, 15, "the service's 15 operations");
+        // the reverse: no route bypasses the documented list
+        let code = include_str!("lib.rs");
+        let code = &code[..code.find("#[cfg(test)]").unwrap_or(code.len())];
+        for bypass in [".route(", ".route_service(", ".nest(", ".nest_service(", ".merge("] {
+            assert!(!code.contains(bypass), "app() registers a route with `{bypass}` outside routes()");
+        }
+        let _ = std::fs::remove_dir_all(dir);
+    }
+
     #[test]
     fn a_running_job_reads_running_and_a_finished_one_keeps_its_total() {
         // regression (issue #16): the record read `queued` while the job ran, and a finished
@@ -1191,10 +1409,10 @@ mod tests {
             units: 12,
         };
         let v = job_view(&s, &r);
-        assert_eq!((v["state"].as_str(), v["progress"]["total"].as_u64()), (Some("running"), Some(12)), "{v}");
+        assert_eq!((v.state, v.progress.total), (JobState::Running, 12), "{v:?}");
         r.state = JobState::Done;
         let v = job_view(&s, &r);
-        assert_eq!((v["progress"]["done"].as_u64(), v["progress"]["total"].as_u64()), (Some(12), Some(12)), "{v}");
+        assert_eq!((v.progress.done, v.progress.total), (12, 12), "{v:?}");
         let _ = std::fs::remove_dir_all(dir);
     }
 

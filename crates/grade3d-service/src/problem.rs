@@ -14,7 +14,7 @@ pub const PROBLEM_JSON: &str = "application/problem+json";
 const INTERNAL_BODY: &[u8] = br#"{"type":"/problems/internal","title":"Internal error","status":500,"detail":"the request could not be completed"}"#;
 
 /// A problem document (RFC 9457 §3.1), with two extension members.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct Problem {
     /// URI reference identifying the problem type (relative: `/problems/<slug>`).
     #[serde(rename = "type")]
@@ -22,6 +22,7 @@ pub struct Problem {
     /// Short, human-readable summary of the problem type.
     pub title: String,
     /// HTTP status code.
+    #[schema(minimum = 400, maximum = 599)]
     pub status: u16,
     /// Explanation of this occurrence.
     pub detail: String,

@@ -24,7 +24,7 @@ pub fn content_id(parts: &[&[u8]]) -> String {
 #[derive(Debug)]
 pub struct Stored {
     /// The JSON answered for the flow (without `cached`).
-    pub summary: serde_json::Value,
+    pub summary: crate::api::GradeResult,
     /// Its artefacts.
     pub artefacts: Vec<Artefact>,
     /// When it must be forgotten, if ever.
@@ -115,7 +115,16 @@ mod tests {
 
     fn stored(n: usize, expires: Option<Instant>) -> Stored {
         Stored {
-            summary: serde_json::json!({}),
+            summary: crate::api::GradeResult {
+                id: "a".into(),
+                flow: "scan".into(),
+                href: "/v1/results/a".into(),
+                expires_in_s: None,
+                report: serde_json::Value::Null,
+                timings_ms: Default::default(),
+                artefacts: vec![],
+                cached: false,
+            },
             artefacts: vec![Artefact { name: "a".into(), media_type: "text/plain", bytes: vec![0; n] }],
             expires,
         }

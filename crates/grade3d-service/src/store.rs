@@ -59,7 +59,7 @@ fn db<E: std::fmt::Display>(e: E) -> StoreError {
 }
 
 /// A template's name and live version.
-#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize, utoipa::ToSchema)]
 pub struct Entry {
     /// Template name.
     pub name: String,

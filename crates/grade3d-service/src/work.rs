@@ -31,7 +31,6 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 
 use crate::body::derive::{derive_features, DeriveOptions, FeatureError, Landmarks};
-use crate::body::ease::{girth_ease, EaseOptions};
 use crate::body::feature::FeatureBody;
 use crate::body::measure::{measure, MeasureOptions};
 use crate::collide::cache::{BodyKey, Obstacle, ObstacleCache};
@@ -50,7 +49,10 @@ use crate::pattern::grade::{grade_rules, nests, GradeError};
 use crate::pattern::piece::PatternPiece;
 use crate::pattern::true_up::{true_nest, TrueOptions, TrueReport};
 use crate::pipeline::{grade_with_plan, GradeOptions, Graded, PipelineError};
+use crate::report::{BodiesReport, BodyReport, Flow, MannequinReport, Report, SizeChartReport, SizeReport};
+use crate::store::Entry;
 use crate::template::format::Template;
+use grade3d_core::report::{fit_report, FitReport, FitReportError, FitReportOptions, FitStep, GarmentReport};
 
 /// Why a flow failed. Client-caused variants name the offending input.
 #[derive(Debug, thiserror::Error)]
@@ -319,17 +321,17 @@ fn base_first(total: usize, base: usize) -> impl Iterator<Item = usize> {
 /// progress. Results by index; the first failure in the sequential order
 /// (the base, then the others in index order) is the one returned, as one
 /// body after another would report it.
-fn base_then_rest<P: Send + Sync>(
+fn base_then_rest<P: Send + Sync, R: Send>(
     total: usize,
     base: usize,
     timer: &mut Timer,
     prepare_base: impl FnOnce(usize, &mut Timer) -> Result<P, WorkError>,
     prepare_rest: impl Fn((usize, usize), &P, &mut Timer) -> Result<P, WorkError> + Sync,
-    grade: impl Fn((usize, usize), &P, Option<&[DartPlan]>, &mut Timer) -> Result<Done, WorkError> + Sync,
-) -> Result<Vec<Option<Done>>, WorkError> {
+    grade: impl Fn((usize, usize), &P, Option<&[DartPlan]>, &mut Timer) -> Result<Done<R>, WorkError> + Sync,
+) -> Result<Vec<Option<Done<R>>>, WorkError> {
     use rayon::prelude::*;
     use std::sync::atomic::{AtomicUsize, Ordering};
-    let mut done: Vec<Option<Done>> = (0..total).map(|_| None).collect();
+    let mut done: Vec<Option<Done<R>>> = (0..total).map(|_| None).collect();
     let mut order = base_first(total, base).filter(|&i| i < total);
     let Some(b) = order.next() else { return Ok(done) };
     let others: Vec<usize> = order.collect();
@@ -352,7 +354,7 @@ fn base_then_rest<P: Send + Sync>(
     done[b] = Some(base_done);
     let mut early = early.into_iter();
     let prepared: Vec<_> = others.iter().map(|_| early.next()).collect();
-    let results: Vec<Result<(Done, Timer), WorkError>> = others
+    let results: Vec<Result<(Done<R>, Timer), WorkError>> = others
         .par_iter()
         .zip(prepared)
         .map(|(&i, pre)| {
@@ -371,7 +373,7 @@ fn base_then_rest<P: Send + Sync>(
 }
 
 /// The dart plan of each template's grade, in template order (a run's base size).
-fn plans_of(graded: &[(String, Graded, serde_json::Value)]) -> Vec<DartPlan> {
+fn plans_of(graded: &[(String, Graded, FitReport)]) -> Vec<DartPlan> {
     graded.iter().map(|(_, g, _)| g.pattern.dart_plan.clone()).collect()
 }
 
@@ -382,7 +384,7 @@ type Prepared<B> = (B, Option<Arc<Obstacle>>);
 /// One graded body of a run, kept until the run is reported in request
 /// order: its grades (template name, grade, fit figures), its report part
 /// (residuals or measurements) and its artefacts.
-type Done = (Vec<(String, Graded, serde_json::Value)>, serde_json::Value, Vec<Artefact>);
+type Done<R> = (Vec<(String, Graded, FitReport)>, R, Vec<Artefact>);
 
 /// Grades every template on one body and writes its per-size artefacts;
 /// `plans[i]`, where given, is template `i`'s dart plan from the run's base
@@ -397,7 +399,7 @@ fn grade_body(
     plans: Option<&[DartPlan]>,
     timer: &mut Timer,
     out: &mut Vec<Artefact>,
-) -> Result<Vec<(String, Graded, serde_json::Value)>, WorkError> {
+) -> Result<Vec<(String, Graded, FitReport)>, WorkError> {
     let mut graded = Vec::with_capacity(templates.len());
     let carry = !ctx.opts.grade.pattern.search_every_size;
     for (i, t) in templates.iter().enumerate() {
@@ -452,7 +454,7 @@ fn pattern_artefacts(template: &str, size: &str, g: &Graded) -> Result<Vec<Artef
 
 /// One graded row of a size chart: its size, each template's grade (with its
 /// fit report) and the row's artefacts.
-type GradedRow = (String, Vec<(String, Graded, serde_json::Value)>, Vec<Artefact>);
+type GradedRow = (String, Vec<(String, Graded, FitReport)>, Vec<Artefact>);
 
 /// Trues every template's nest over the graded rows (chart order, `base`
 /// their base row) and writes the per-size pattern artefacts of the pieces
@@ -486,78 +488,30 @@ fn true_rows(
     Ok(reports)
 }
 
-/// The garment as GLB with the ease (distance to the body, mm) and the
-/// panel index as vertex attributes, and the fit figures of the report.
+/// The garment as GLB with the ease (distance to the body, mm) as a vertex
+/// attribute, and its fit report (the core's [`fit_report`] step).
 fn garment_glb(
     t: &Template,
     g: &Graded,
     body: &FeatureBody,
     obstacle: Option<&Obstacle>,
-) -> Result<(Vec<u8>, serde_json::Value), WorkError> {
+) -> Result<(Vec<u8>, FitReport), WorkError> {
     let tris: Vec<[VertexId; 3]> = g.mesh.triangles.iter().map(|t| t.map(VertexId)).collect();
     let mesh = TriMesh::new(g.mesh.positions.clone(), tris).map_err(|e| WorkError::GarmentGlb(GltfError::Mesh(e)))?;
-    // girths are measured on the garment as cut (the pattern's surface)
-    let cut = g.cut_mesh().map_err(|e| WorkError::GarmentGlb(GltfError::Mesh(e)))?;
-    let ease_mm: Vec<f64> = match obstacle {
-        Some(ob) => g.mesh.positions.iter().map(|&p| -ob.tree.signed_depth(p) * 1e3).collect(),
-        None => vec![0.0; g.mesh.positions.len()],
-    };
+    let FitStep { ease_mm, report } =
+        fit_report(t, g, body, obstacle, &FitReportOptions::default()).map_err(|e| match e {
+            FitReportError::CutMesh(e) => WorkError::GarmentGlb(GltfError::Mesh(e)),
+        })?;
     let normals = mesh.vertex_normals();
     let ease_f32: Vec<f32> = ease_mm.iter().map(|&e| e as f32).collect();
     let glb = write_glb(&mesh, Some(&normals), &[GlbAttribute { name: "_EASE_MM", values: &ease_f32 }], "grade3d")
         .map_err(WorkError::GarmentGlb)?;
-    let mut sorted = ease_mm.clone();
-    sorted.sort_by(f64::total_cmp);
-    let pick = |q: f64| sorted.get(((sorted.len().saturating_sub(1)) as f64 * q).round() as usize).copied();
-    let inside = ease_mm.iter().filter(|&&e| e < 0.0).count();
-    let penetration = obstacle.map(|_| penetration_report(g, body, &ease_mm));
-    let fit = serde_json::json!({
-        "collision_checked": obstacle.is_some(),
-        "distance_to_body_mm": {
-            "min": pick(0.0), "p05": pick(0.05), "median": pick(0.5), "p95": pick(0.95), "max": pick(1.0),
-        },
-        "vertices_inside_body": inside,
-        "penetration": penetration,
-        "girth_ease": girth_ease(body, &cut, t, &g.expected_ease_mm, &g.girth_lines, &EaseOptions::default()),
-    });
-    Ok((glb, fit))
+    Ok((glb, report))
 }
 
-/// Every garment vertex (fixed ones included) by the exact inside test, the
-/// deepest one with the feature point nearest to it, and the garment/body
-/// triangle pairs that intersect (the exact test of the pipeline's last
-/// surface-clearing round). `ease_mm` is each vertex's signed distance to
-/// the body (negative inside), already computed by the exact test for the GLB.
-fn penetration_report(g: &Graded, body: &FeatureBody, ease_mm: &[f64]) -> serde_json::Value {
-    let inside = ease_mm.iter().filter(|&&e| e < 0.0).count();
-    let deepest = ease_mm.iter().enumerate().filter(|(_, &e)| e < 0.0).min_by(|a, b| a.1.total_cmp(b.1));
-    let nearest = deepest.and_then(|(i, _)| {
-        let p = g.mesh.positions[i];
-        body.points.iter().min_by(|a, b| a.1.position.distance(p).total_cmp(&b.1.position.distance(p))).map(|(id, q)| {
-            serde_json::json!({ "feature_point": id.as_str(), "distance_mm": (q.position.distance(p) * 1e4).round() / 10.0 })
-        })
-    });
-    serde_json::json!({
-        "vertices": ease_mm.len(),
-        "vertices_inside": inside,
-        "deepest_mm": deepest.map_or(0.0, |(_, &e)| (-e * 100.0).round() / 100.0),
-        "deepest_near": nearest,
-        "garment_triangles": g.collision.surface.garment_triangles,
-        "intersecting_triangle_pairs": g.collision.surface.pairs_after,
-        "intersecting_triangle_pairs_at_thigh_contact": g.collision.surface.pairs_after_at_thigh_contact,
-        "intersecting_triangle_pairs_before_clearing": g.collision.surface.pairs_before,
-    })
-}
-
-fn garment_report(name: &str, g: &Graded, fit: serde_json::Value) -> serde_json::Value {
-    serde_json::json!({
-        "template": name,
-        "fit": fit,
-        "collision": g.collision,
-        "pieces": g.pattern.reports,
-        "seams": g.pattern.seams,
-        "darts_left_out": g.pattern.darts_left_out,
-    })
+/// The templates of a run by name and version, for the report.
+fn template_entries(templates: &[Template]) -> Vec<Entry> {
+    templates.iter().map(|t| Entry { name: t.name.clone(), version: t.version }).collect()
 }
 
 /// The DXF options of the Gerber AccuMark profile (strict R12: empty HEADER, no TABLES).
@@ -607,15 +561,15 @@ fn graded_nest(
 
 /// The garment reports of one body; each template's pieces join its sizes.
 fn collect(
-    graded: Vec<(String, Graded, serde_json::Value)>,
+    graded: Vec<(String, Graded, FitReport)>,
     size: &str,
     per_template: &mut [Vec<(String, Vec<PatternPiece>)>],
-) -> Vec<serde_json::Value> {
+) -> Vec<GarmentReport> {
     graded
         .into_iter()
         .zip(per_template.iter_mut())
         .map(|((name, g, fit), sizes)| {
-            let report = garment_report(&name, &g, fit);
+            let report = GarmentReport::new(&name, &g, fit);
             sizes.push((size.to_owned(), g.pattern.pieces));
             report
         })
@@ -639,7 +593,10 @@ fn graded_nests(
     Ok(())
 }
 
-fn finish(report: serde_json::Value, mut artefacts: Vec<Artefact>, timer: Timer) -> Result<Outcome, WorkError> {
+fn finish(report: Report, mut artefacts: Vec<Artefact>, timer: Timer) -> Result<Outcome, WorkError> {
+    // through a Value: every object's keys in lexicographic order (module docs of [`crate::report`])
+    let report =
+        serde_json::to_value(&report).map_err(|source| WorkError::Serialise { what: "report.json".into(), source })?;
     let bytes = json_bytes("report.json", &report, true)?;
     artefacts.push(Artefact { name: "report.json".into(), media_type: "application/json", bytes });
     Ok(Outcome { report, artefacts, timings: timer.0 })
@@ -696,22 +653,15 @@ pub fn size_chart(
                       (fitted, obstacle): &Prepared<FittedMannequin>,
                       plans: Option<&[DartPlan]>,
                       timer: &mut Timer|
-     -> Result<Done, WorkError> {
+     -> Result<Done<MannequinReport>, WorkError> {
         let row = &chart.rows[i];
         progress(stage::REFINE, done, total);
         let mut out = Vec::new();
         let graded = grade_body(ctx, templates, &fitted.body, obstacle.as_deref(), &row.size, plans, timer, &mut out)?;
-        let residuals: BTreeMap<&str, serde_json::Value> = fitted
-            .residuals
-            .iter()
-            .map(|(id, r)| {
-                (
-                    id.as_str(),
-                    serde_json::json!({"target_m": r.target_m, "achieved_m": r.achieved_m, "error_mm": r.error_mm()}),
-                )
-            })
-            .collect();
-        let mannequin = serde_json::json!({"residuals": residuals, "warnings": fitted.body.warnings});
+        let mannequin = MannequinReport {
+            residuals: fitted.residuals.iter().map(|(id, r)| (id.as_str().to_owned(), r.into())).collect(),
+            warnings: fitted.body.warnings.clone(),
+        };
         Ok((graded, mannequin, out))
     };
     // the base size first: its body is the one every other size grows from, its dart plan
@@ -741,21 +691,21 @@ pub fn size_chart(
     for ((size, graded, out), mannequin) in rows.into_iter().zip(mannequins) {
         artefacts.extend(out);
         let garments = collect(graded, &size, &mut per_template);
-        sizes.push(serde_json::json!({"size": size, "mannequin": mannequin, "garments": garments}));
+        sizes.push(SizeReport { size, mannequin, garments });
     }
     graded_nests(templates, &per_template, &base, created, &mut timer, &mut artefacts)?;
-    let report = serde_json::json!({
-        "flow": "size-chart",
-        "sex": chart.sex,
-        "sex_source": chart.sex_source,
-        "figure": (chart.sex == Sex::Female).then_some(chart.figure),
-        "base_size": base,
-        "templates": templates.iter().map(|t| serde_json::json!({"name": t.name, "version": t.version})).collect::<Vec<_>>(),
-        "collision_checked": ctx.gpu.is_some(),
-        "nest_truing": truing.into_iter().collect::<BTreeMap<_, _>>(),
-        "sizes": sizes,
-    });
-    finish(report, artefacts, timer)
+    let report = SizeChartReport {
+        flow: Flow::SizeChart,
+        sex: chart.sex,
+        sex_source: chart.sex_source,
+        figure: (chart.sex == Sex::Female).then_some(chart.figure),
+        base_size: base,
+        templates: template_entries(templates),
+        collision_checked: ctx.gpu.is_some(),
+        nest_truing: truing.into_iter().collect(),
+        sizes,
+    };
+    finish(Report::SizeChart(report), artefacts, timer)
 }
 
 /// Grades every template on every body (scans); with more than one body the
@@ -792,15 +742,21 @@ pub fn bodies(
                      (body, obstacle): &Prepared<FeatureBody>,
                      plans: Option<&[DartPlan]>,
                      timer: &mut Timer|
-     -> Result<Done, WorkError> {
+     -> Result<Done<BodyReport>, WorkError> {
         let input = &inputs[i];
         progress(stage::REFINE, done, total);
         let mut out = Vec::new();
         let graded = grade_body(ctx, templates, body, obstacle.as_deref(), input.name, plans, timer, &mut out)?;
-        let measurements: BTreeMap<&str, f64> =
-            measure(body, &MeasureOptions::default()).iter().map(|(id, v)| (id.as_str(), *v)).collect();
-        // what derivation accepted but a person should look at (issue #13: warnings, not refusals)
-        let about = serde_json::json!({"measurements_m": measurements, "warnings": body.warnings});
+        let about = BodyReport {
+            body: input.name.to_owned(),
+            measurements_m: measure(body, &MeasureOptions::default())
+                .iter()
+                .map(|(id, v)| (id.as_str().to_owned(), *v))
+                .collect(),
+            // what derivation accepted but a person should look at (issue #13: warnings, not refusals)
+            warnings: body.warnings.clone(),
+            garments: Vec::new(),
+        };
         Ok((graded, about, out))
     };
     // the base body first (several bodies: a run): its dart plan is carried to the others
@@ -816,10 +772,7 @@ pub fn bodies(
         let Some((graded, about, out)) = done else { continue };
         artefacts.extend(out);
         let garments = collect(graded, input.name, &mut per_template);
-        let mut entry = about;
-        entry["body"] = serde_json::json!(input.name);
-        entry["garments"] = serde_json::json!(garments);
-        reports.push(entry);
+        reports.push(BodyReport { garments, ..about });
     }
     if inputs.len() > 1 {
         let base = match base {
@@ -830,13 +783,13 @@ pub fn bodies(
         graded_nests(templates, &per_template, &base, created, &mut timer, &mut artefacts)?;
     }
     progress(stage::EXPORT, total, total);
-    let report = serde_json::json!({
-        "flow": if inputs.len() == 1 { "scan" } else { "bodies" },
-        "templates": templates.iter().map(|t| serde_json::json!({"name": t.name, "version": t.version})).collect::<Vec<_>>(),
-        "collision_checked": ctx.gpu.is_some(),
-        "bodies": reports,
-    });
-    finish(report, artefacts, timer)
+    let report = BodiesReport {
+        flow: if inputs.len() == 1 { Flow::Scan } else { Flow::Bodies },
+        templates: template_entries(templates),
+        collision_checked: ctx.gpu.is_some(),
+        bodies: reports,
+    };
+    finish(Report::Bodies(report), artefacts, timer)
 }
 
 /// The scan flow: one body, one or more templates.

@@ -164,7 +164,7 @@ impl Default for DeriveOptions {
 
 /// Something derivation accepted but a person should look at: the body is
 /// graded, and the report lists it (issue #13, item 3).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct FeatureWarning {
     /// Kind: `landmark-near-midline-limit`, `landmark-far-from-surface`,
     /// `frame-nearly-degenerate`, `thighs-in-contact`.

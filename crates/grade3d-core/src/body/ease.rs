@@ -70,7 +70,7 @@ impl Default for EaseOptions {
 }
 
 /// The ease at one declared girth.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct GirthEase {
     /// The template's name for it (`"hip"`).
     pub girth: String,

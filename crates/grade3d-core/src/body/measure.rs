@@ -114,6 +114,19 @@ impl fmt::Display for MeasurementId {
     }
 }
 
+/// A measurement id is its stable string (`hip_girth`), one of [`MeasurementId::ALL`].
+impl utoipa::PartialSchema for MeasurementId {
+    fn schema() -> utoipa::openapi::RefOr<utoipa::openapi::schema::Schema> {
+        utoipa::openapi::ObjectBuilder::new()
+            .schema_type(utoipa::openapi::schema::Type::String)
+            .description(Some("A body measurement (ISO 8559-1 names)"))
+            .enum_values(Some(Self::ALL.iter().map(|m| m.as_str())))
+            .into()
+    }
+}
+
+impl utoipa::ToSchema for MeasurementId {}
+
 impl Serialize for MeasurementId {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         s.serialize_str(self.as_str())

@@ -65,7 +65,7 @@ impl FromStr for Unit {
 }
 
 /// ASTM D5585 figure type: which waist column is the waist girth.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum FigureType {
     /// `waist_girth_curvy` (default).
@@ -76,7 +76,7 @@ pub enum FigureType {
 }
 
 /// Whose body a chart describes: the sex of its mannequins' model.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum Sex {
     /// Women's (misses', petites', …) charts.
@@ -87,7 +87,7 @@ pub enum Sex {
 }
 
 /// How a chart's [`Sex`] was settled.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum SexSource {
     /// The chart (or the request) says it.
@@ -469,33 +469,58 @@ pub fn parse_csv(text: &str, opts: &SizeChartOptions) -> Result<SizeChart, SizeC
     finish(raw, None, opts, opts.figure, stated)
 }
 
-#[derive(Deserialize)]
+/// A size chart as a JSON document (what [`parse_json`] reads): units per
+/// chart or per row or per value (`cm`, `mm`, `m`, `in`), one object of
+/// ISO 8559-1 measurements per size.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(deny_unknown_fields)]
-struct JsonChart {
-    unit: Option<String>,
-    figure: Option<FigureType>,
-    sex: Option<Sex>,
-    sizes: Vec<JsonRow>,
+pub struct SizeChartDocument {
+    /// The unit of every value that does not say (`cm`, `mm`, `m` or `in`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unit: Option<String>,
+    /// Which ASTM waist column is the waist girth (women's charts).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub figure: Option<FigureType>,
+    /// Whose bodies the chart describes; inferred from the columns when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sex: Option<Sex>,
+    /// The sizes, in grading order.
+    pub sizes: Vec<SizeChartDocumentRow>,
 }
 
-#[derive(Deserialize)]
+/// One size of a [`SizeChartDocument`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(deny_unknown_fields)]
-struct JsonRow {
-    size: String,
-    unit: Option<String>,
-    measurements: BTreeMap<String, JsonValue>,
+pub struct SizeChartDocumentRow {
+    /// The size label (`8`, `M`, `38`).
+    pub size: String,
+    /// The unit of this row's values that do not say.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unit: Option<String>,
+    /// Measurement (ISO 8559-1 name, e.g. `bust_girth`, or an ASTM waist
+    /// column `waist_girth_curvy`) → value.
+    pub measurements: BTreeMap<String, MeasurementValue>,
 }
 
-#[derive(Deserialize)]
+/// A measurement of a [`SizeChartDocumentRow`]: a number in the row's (or
+/// chart's) unit, or a number with its own unit.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(untagged)]
-enum JsonValue {
+pub enum MeasurementValue {
+    /// In the row's or chart's unit.
     Plain(f64),
-    WithUnit { value: f64, unit: String },
+    /// With its own unit.
+    WithUnit {
+        /// The value.
+        value: f64,
+        /// Its unit (`cm`, `mm`, `m` or `in`).
+        unit: String,
+    },
 }
 
 /// Parses a JSON size chart.
 pub fn parse_json(text: &str, opts: &SizeChartOptions) -> Result<SizeChart, SizeChartError> {
-    let c: JsonChart = serde_json::from_str(text).map_err(|e| SizeChartError::Syntax(e.to_string()))?;
+    let c: SizeChartDocument = serde_json::from_str(text).map_err(|e| SizeChartError::Syntax(e.to_string()))?;
     if c.sizes.len() > opts.max_sizes {
         return Err(SizeChartError::TooManySizes { count: c.sizes.len(), max: opts.max_sizes });
     }
@@ -511,8 +536,8 @@ pub fn parse_json(text: &str, opts: &SizeChartOptions) -> Result<SizeChart, Size
                 .into_iter()
                 .map(|(k, v)| {
                     let v = match v {
-                        JsonValue::Plain(x) => RawValue::Number(x, None),
-                        JsonValue::WithUnit { value, unit } => RawValue::Number(value, Some(unit)),
+                        MeasurementValue::Plain(x) => RawValue::Number(x, None),
+                        MeasurementValue::WithUnit { value, unit } => RawValue::Number(value, Some(unit)),
                     };
                     (k, v)
                 })

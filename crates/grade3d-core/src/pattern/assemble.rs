@@ -119,7 +119,7 @@ pub struct PlacedPanel {
 }
 
 /// Figures of one seam: the two sides' 2D lengths against the 3D length.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct SeamReport {
     /// Seam name.
     pub name: String,

@@ -102,7 +102,7 @@ pub struct Trial {
 }
 
 /// What one found dart did.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct FoundDart {
     /// Dart name.
     pub name: String,
@@ -117,6 +117,7 @@ pub struct FoundDart {
     /// And with it (fraction), in the same flattening.
     pub strain_p95_after: f64,
     /// Apex, 3D, metres (where the strain gathered).
+    #[schema(value_type = Vec<f64>, min_items = 3, max_items = 3)]
     pub apex: DVec3,
     /// How this piece got it.
     #[serde(default)]
@@ -125,7 +126,7 @@ pub struct FoundDart {
 
 /// How a piece got a found dart (issue #14: one dart plan per run, mirrored
 /// onto mirror pairs).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum DartOrigin {
     /// Searched on this piece, where it strained ([`insert_darts`]); the

@@ -33,7 +33,7 @@ use glam::{DMat2, DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
 /// Thread strain and weave shear of a piece ([`fabric_strain`]).
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct FabricStrain {
     /// 95th percentile (by area) of `|ε|` along the warp (the grain line).
     pub warp_p95: f64,

@@ -359,7 +359,7 @@ pub struct Flattening {
 }
 
 /// Distortion of a flattening (Wang, Smith & Yuen 2002; module docs).
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct Distortion {
     /// Area accuracy `E_s = (A − A′)/A`: `A` the 3D area, `A′` the sum of the
     /// 2D triangle areas (absolute values).

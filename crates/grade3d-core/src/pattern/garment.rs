@@ -207,9 +207,10 @@ pub struct PlannedDart {
 }
 
 /// Where the strain of a piece concentrates.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct StrainHotspot {
     /// Centroid of the edges above the 95th percentile, piece coordinates, mm.
+    #[schema(value_type = Vec<f64>, min_items = 2, max_items = 2)]
     pub at: DVec2,
     /// The template node nearest to it (its feature point, e.g. `bust_front_left`).
     pub near: String,
@@ -218,7 +219,7 @@ pub struct StrainHotspot {
 }
 
 /// Figures of one piece.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct PieceReport {
     /// Piece name.
     pub name: String,

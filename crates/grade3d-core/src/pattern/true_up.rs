@@ -131,7 +131,7 @@ impl Default for TrueOptions {
 }
 
 /// How far truing moved one piece of one size.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct TrueMove {
     /// Piece name.
     pub piece: String,
@@ -144,7 +144,7 @@ pub struct TrueMove {
 }
 
 /// What truing did.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct TrueReport {
     /// Every piece and size that moved.
     pub moved: Vec<TrueMove>,

@@ -150,7 +150,7 @@ pub enum ClearError {
 }
 
 /// What [`clear_coarse`] moved.
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct CoarseClearReport {
     /// Template nodes moved out.
     pub nodes_moved: usize,
@@ -161,7 +161,7 @@ pub struct CoarseClearReport {
 }
 
 /// What [`clear_surface`] did.
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct SurfaceClearReport {
     /// Garment triangles in the test.
     pub garment_triangles: usize,

@@ -61,7 +61,7 @@ impl Default for CollisionOptions {
 }
 
 /// What the collision step did over a refinement.
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct CollisionReport {
     /// Vertices pushed out of the body.
     pub pushed: usize,

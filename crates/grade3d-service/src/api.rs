@@ -1,0 +1,387 @@
+//! The HTTP contract, generated from the code (issue #16, item 4).
+//!
+//! Every route of [`crate::app`] is a handler annotated with
+//! `#[utoipa::path]` and registered through `utoipa_axum`'s
+//! `OpenApiRouter` ([`crate::routes`]): the router and the OpenAPI
+//! document come from the same list, so no route can be served without
+//! being documented. The request, response and report types are the serde
+//! structs below (and [`crate::report`], [`grade3d_core::report`]) with
+//! `utoipa` schemas; [`openapi_yaml`] writes the document that is committed
+//! as `openapi.yaml` (`grade3d openapi > openapi.yaml`), and a test fails
+//! when the committed file differs from it.
+//!
+//! Artefact downloads answer their own media type (`model/gltf-binary`,
+//! `image/vnd.dxf`, `image/svg+xml`, …), or `application/octet-stream`
+//! when the client accepts only that; the latter is listed first, so that a
+//! generated client reads any artefact as bytes.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+use utoipa::openapi::security::{HttpAuthScheme, HttpBuilder, SecurityScheme};
+use utoipa::openapi::{ContentBuilder, HeaderBuilder, Ref, RefOr, Response, ResponseBuilder};
+use utoipa::{Modify, OpenApi, ToResponse, ToSchema};
+
+use grade3d_core::mannequin::size_chart::{FigureType, SizeChartDocument};
+
+use crate::jobs::JobState;
+use crate::problem::{Problem, PROBLEM_JSON};
+use crate::report::Report;
+use crate::store::Entry;
+
+/// The artefact names a result or job can have, as a regular expression.
+pub const ARTEFACT_PATTERN: &str = r"^(report\.json|[A-Za-z0-9._-]+\.(pattern\.svg|pattern\.dxf|pattern\.accumark\.dxf|pattern\.json|garment\.glb|nest\.svg|nest\.dxf|nest\.accumark\.dxf|nest\.rul|rules\.csv))$";
+
+/// `GET /readyz`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+pub struct Ready {
+    /// Always true (a service that is not ready answers 503).
+    pub ready: bool,
+    /// Live templates.
+    pub templates: usize,
+    /// The adapter, or null when none was found (grading then runs without
+    /// collision avoidance).
+    pub gpu: Option<String>,
+}
+
+/// A size chart: a JSON document, or CSV text (a `size` column, optional
+/// `unit` and `sex` columns, one column per ISO 8559-1 measurement).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+#[serde(untagged)]
+#[schema(as = SizeChart)]
+pub enum SizeChartInput {
+    /// A JSON size chart.
+    Document(SizeChartDocument),
+    /// A CSV size chart.
+    Csv(String),
+}
+
+/// Body of `POST /v1/grade/size-chart` as JSON.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SizeChartRequest {
+    /// Template names (at most the configured limit, 8 by default).
+    pub templates: Vec<String>,
+    /// The chart.
+    #[schema(value_type = SizeChartInput)]
+    pub chart: serde_json::Value,
+    /// The grade rules' base size (default: the middle row).
+    #[serde(default)]
+    pub base_size: Option<String>,
+    /// The figure type of ASTM waist columns, where the chart does not say.
+    #[serde(default)]
+    pub figure: Option<FigureType>,
+    /// RFC 3339 date-time written (in UTC) as the `.RUL` files' `CREATION
+    /// DATE:` and `CREATION TIME:`; part of the result's content address.
+    /// Default: when the result is computed (a cached result keeps its
+    /// stamp); give it for byte-identical artefacts from any server or from
+    /// `grade3d grade --created`.
+    #[serde(default)]
+    #[schema(format = DateTime)]
+    pub created: Option<String>,
+}
+
+/// Query of `POST /v1/grade/size-chart` with a CSV body.
+#[derive(Debug, Clone, PartialEq, Deserialize, utoipa::IntoParams)]
+#[serde(deny_unknown_fields)]
+#[into_params(parameter_in = Query)]
+pub struct SizeChartQuery {
+    /// With a CSV body, comma-separated template names.
+    pub templates: Option<String>,
+    /// With a CSV body, the base size of the grade rules (default the middle row).
+    pub base_size: Option<String>,
+    /// With a CSV body, the figure type for ASTM waist columns.
+    pub figure: Option<FigureType>,
+    /// With a CSV body, the `.RUL` files' creation stamp (as `SizeChartRequest.created`).
+    #[param(format = DateTime)]
+    pub created: Option<String>,
+}
+
+/// Query of `GET /v1/templates/{name}`.
+#[derive(Debug, Clone, PartialEq, Deserialize, utoipa::IntoParams)]
+#[serde(deny_unknown_fields)]
+#[into_params(parameter_in = Query)]
+pub struct VersionQuery {
+    /// A version by number (default: the live one).
+    pub version: Option<u32>,
+}
+
+/// Multipart body of `POST /v1/grade/scan`.
+#[derive(Debug, ToSchema)]
+pub struct ScanUpload {
+    /// The scan: GLB, or glTF with embedded buffers; metres, Y up, facing +Z.
+    #[schema(value_type = String, format = Binary)]
+    pub scan: Vec<u8>,
+    /// The landmarks document (JSON).
+    pub landmarks: String,
+    /// A template name, or several comma-separated.
+    pub template: String,
+}
+
+/// One artefact of a result or job.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+pub struct ArtefactLink {
+    /// File name.
+    pub name: String,
+    /// Media type.
+    pub media_type: String,
+    /// Size, bytes.
+    pub bytes: usize,
+    /// Where to download it.
+    pub href: String,
+}
+
+/// The answer of the grading flows and `GET /v1/results/{id}`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+pub struct GradeResult {
+    /// Content address of the inputs.
+    pub id: String,
+    /// `size-chart` or `scan`.
+    pub flow: String,
+    /// The result's URL.
+    pub href: String,
+    /// Scan results: seconds they are kept.
+    pub expires_in_s: Option<u64>,
+    /// The fit report.
+    #[schema(value_type = Report)]
+    pub report: serde_json::Value,
+    /// Wall time per stage, ms.
+    pub timings_ms: BTreeMap<String, f64>,
+    /// Every artefact.
+    pub artefacts: Vec<ArtefactLink>,
+    /// Whether it was served from the cache.
+    pub cached: bool,
+}
+
+/// Where a job is in its run. Units are the chart's sizes or the job's
+/// bodies; `total` stays the same from submission to the end (`done` =
+/// `total` once done).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+pub struct JobProgress {
+    /// The stage now (`queued`, `fit`, `body`, `refine`, `export`, `done`, `failed`).
+    pub stage: String,
+    /// Units done.
+    pub done: usize,
+    /// Units in all.
+    pub total: usize,
+}
+
+/// A batch job.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+#[schema(as = Job)]
+pub struct JobView {
+    /// Content address of its inputs.
+    pub id: String,
+    /// The job's URL.
+    pub href: String,
+    /// Its state.
+    pub state: JobState,
+    /// Its progress.
+    pub progress: JobProgress,
+    /// The templates, with the versions fixed at submission.
+    pub templates: Vec<Entry>,
+    /// The problem of a failed job.
+    pub error: Option<Problem>,
+    /// The fit report of a finished job.
+    #[schema(value_type = Option<Report>)]
+    pub report: Option<serde_json::Value>,
+    /// Wall time per stage, ms.
+    pub timings_ms: BTreeMap<String, f64>,
+    /// Its artefacts, once done.
+    pub artefacts: Vec<ArtefactLink>,
+}
+
+/// A problem response of the given description.
+fn problem(description: &str) -> Response {
+    ResponseBuilder::new()
+        .description(description)
+        .content(PROBLEM_JSON, ContentBuilder::new().schema(Some(Ref::from_schema_name("Problem"))).build())
+        .build()
+}
+
+macro_rules! problem_responses {
+    ($($name:ident: $desc:literal),+ $(,)?) => {
+        $(
+            #[doc = $desc]
+            pub struct $name;
+            impl<'s> ToResponse<'s> for $name {
+                fn response() -> (&'s str, RefOr<Response>) {
+                    (stringify!($name), problem($desc).into())
+                }
+            }
+        )+
+    };
+}
+
+problem_responses! {
+    BadRequest: "Malformed or invalid input; `field` names it.",
+    Unauthorized: "A missing or invalid API key.",
+    Forbidden: "Writes are disabled (no API key configured).",
+    NotFound: "No such template, version, result, job or artefact.",
+    Conflict: "The template exists (replace it with PUT).",
+    TooLarge: "The body (or a scan's vertex count) exceeds the configured limit.",
+    UnsupportedMedia: "The Content-Type is not one this route reads.",
+    Unprocessable: "Well-formed input the domain refuses (an unknown template, a body that is not a body, a template that does not fit).",
+    Internal: "An internal error (nothing internal is disclosed).",
+}
+
+/// Busy (the work queue is full), over the time limit, or not ready; retry
+/// after `Retry-After` seconds.
+pub struct Unavailable;
+
+impl<'s> ToResponse<'s> for Unavailable {
+    fn response() -> (&'s str, RefOr<Response>) {
+        let mut r = problem(
+            "Busy (the work queue is full), over the time limit, or not ready; retry after `Retry-After` seconds.",
+        );
+        r.headers.insert(
+            "Retry-After".into(),
+            HeaderBuilder::new()
+                .schema(utoipa::openapi::ObjectBuilder::new().schema_type(utoipa::openapi::schema::Type::String))
+                .description(Some("Seconds to wait before retrying."))
+                .build(),
+        );
+        ("Unavailable", r.into())
+    }
+}
+
+/// A cached result's or a finished job's artefact, with its media type.
+pub struct ArtefactBytes;
+
+impl<'s> ToResponse<'s> for ArtefactBytes {
+    fn response() -> (&'s str, RefOr<Response>) {
+        use utoipa::openapi::schema::{ObjectBuilder, Type};
+        let binary =
+            || {
+                ContentBuilder::new()
+                    .schema(Some(ObjectBuilder::new().schema_type(Type::String).format(Some(
+                        utoipa::openapi::SchemaFormat::KnownFormat(utoipa::openapi::KnownFormat::Binary),
+                    ))))
+                    .build()
+            };
+        let text = || ContentBuilder::new().schema(Some(ObjectBuilder::new().schema_type(Type::String))).build();
+        let r = ResponseBuilder::new()
+            .description(
+                "The artefact's bytes, with its media type (`application/octet-stream` when the request \
+                 accepts only that). `.dxf`: AAMA/ASTM D6673; `.accumark.dxf`: Gerber AccuMark's strict R12; \
+                 `.nest.rul`: the grade rules the nest DXF's `# n` texts number.",
+            )
+            .content("application/octet-stream", binary())
+            .content("model/gltf-binary", binary())
+            .content("image/vnd.dxf", text())
+            .content("image/svg+xml", text())
+            .content("text/csv", text())
+            .content("text/plain", text())
+            .content("application/json", ContentBuilder::new().schema(Some(ObjectBuilder::new())).build())
+            .header(
+                "Content-Disposition",
+                HeaderBuilder::new()
+                    .schema(ObjectBuilder::new().schema_type(Type::String))
+                    .description(Some("`attachment; filename=\"<name>\"`"))
+                    .build(),
+            )
+            .build();
+        ("Artefact", r.into())
+    }
+}
+
+/// Adds the API-key security scheme.
+struct ApiKey;
+
+impl Modify for ApiKey {
+    fn modify(&self, openapi: &mut utoipa::openapi::OpenApi) {
+        let components = openapi.components.get_or_insert_with(Default::default);
+        components.add_security_scheme(
+            "apiKey",
+            SecurityScheme::Http(
+                HttpBuilder::new()
+                    .scheme(HttpAuthScheme::Bearer)
+                    .description(Some(
+                        "The API key configured at start (`GRADE3D_API_KEY`); required for template writes, \
+                         and for reads with `--protect-reads`.",
+                    ))
+                    .build(),
+            ),
+        );
+    }
+}
+
+/// The document's header and shared components; the paths come from the router.
+#[derive(OpenApi)]
+#[openapi(
+    info(
+        title = "grade3d",
+        description = "Grades garment feature templates onto bodies (size-chart mannequins or body scans with \
+landmarks), refines and flattens them, and returns meshes, sewing patterns (SVG, AAMA DXF, JSON), graded nests, \
+grade rules and a fit report. Every error is an RFC 9457 problem document (`application/problem+json`) that names \
+the offending field.\n\nGenerated from the code (`grade3d openapi`); do not edit by hand.",
+        license(name = "MIT OR Apache-2.0", identifier = "MIT OR Apache-2.0"),
+    ),
+    servers((url = "http://127.0.0.1:8080")),
+    tags(
+        (name = "operations", description = "Liveness, readiness, metrics"),
+        (name = "templates", description = "The garment template library"),
+        (name = "grading", description = "The size-chart and scan flows and their cached results"),
+        (name = "jobs", description = "Batch jobs"),
+    ),
+    components(
+        schemas(Problem, Report),
+        responses(
+            BadRequest, Unauthorized, Forbidden, NotFound, Conflict, TooLarge, UnsupportedMedia,
+            Unprocessable, Unavailable, Internal, ArtefactBytes
+        ),
+    ),
+    modifiers(&ApiKey),
+)]
+pub struct ApiDoc;
+
+/// The OpenAPI document of [`crate::app`]: [`ApiDoc`] with the router's paths.
+pub fn openapi() -> utoipa::openapi::OpenApi {
+    crate::routes().split_for_parts().1
+}
+
+/// [`openapi`] as YAML: what `openapi.yaml` holds, with the types' rustdoc
+/// links written as plain code (``[`crate::body::contact`]`` → `` `contact` ``;
+/// they occur in descriptions only).
+///
+/// # Errors
+/// Why the document did not serialise (a broken schema; internal).
+pub fn openapi_yaml() -> Result<String, String> {
+    openapi().to_yaml().map(|y| plain_text(&y)).map_err(|e| e.to_string())
+}
+
+/// `text` with each ``[`path::Name`]`` written `` `Name` `` (a type's
+/// member kept: ``[`Type::member`]`` → `` `Type::member` ``).
+fn plain_text(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some(start) = rest.find("[`") {
+        let Some(len) = rest[start + 2..].find("`]") else { break };
+        let path = &rest[start + 2..start + 2 + len];
+        let segments: Vec<&str> = path.split("::").collect();
+        // keep from the first segment that names a type (upper case), else the last one
+        let from = segments.iter().position(|s| s.starts_with(|c: char| c.is_ascii_uppercase()));
+        let kept = segments[from.unwrap_or(segments.len() - 1)..].join("::");
+        out.push_str(&rest[..start]);
+        out.push('`');
+        out.push_str(&kept);
+        out.push('`');
+        rest = &rest[start + 2 + len + 2..];
+    }
+    out.push_str(rest);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rustdoc_links_become_plain_code() {
+        assert_eq!(
+            plain_text("a ([`crate::body::contact`]) b [`Collider::settle_fixed`], [`x`] [`super::fabric`]"),
+            "a (`contact`) b `Collider::settle_fixed`, `x` `fabric`"
+        );
+        assert_eq!(plain_text("no link [`unclosed"), "no link [`unclosed");
+    }
+}
