@@ -9,6 +9,7 @@ use super::problem::Problem;
 use super::store::StoreError;
 use super::work::WorkError;
 use crate::body::derive::FeatureError;
+use crate::geom::topology::TopologyError;
 use crate::io::gltf::GltfError;
 use crate::io::landmarks::LandmarkFileError;
 use crate::mannequin::fit::FitError;
@@ -57,8 +58,12 @@ pub fn template_problem(e: &TemplateError) -> Problem {
         TemplateError::BadEdge { .. } => ("template-bad-edge", "template.edges"),
         TemplateError::MissingEdge { .. } => ("template-missing-edge", "template.faces"),
         TemplateError::InconsistentDirections { .. } => ("template-edge-directions", "template.faces"),
-        TemplateError::NonManifoldEdge { .. } => ("template-non-manifold", "template.faces"),
-        TemplateError::InconsistentOrientation { .. } => ("template-orientation", "template.faces"),
+        TemplateError::Topology(TopologyError::NonManifoldEdge { .. } | TopologyError::NonManifoldVertex { .. }) => {
+            ("template-non-manifold", "template.faces")
+        }
+        TemplateError::Topology(TopologyError::InconsistentOrientation { .. }) => {
+            ("template-orientation", "template.faces")
+        }
         TemplateError::BadReference { .. } => ("template-bad-reference", "template"),
     };
     Problem::unprocessable(slug, e.to_string()).field(field)
@@ -234,8 +239,7 @@ fn grade_failure(e: &PipelineError) -> GradeFailure {
         PipelineError::Refine(r) => match r {
             RefineError::Profile { .. } => OnThisBody("refine-failed"),
             // the decoded mesh of a validated template: our fault when it is not a mesh
-            RefineError::NonManifoldEdge { .. }
-            | RefineError::InconsistentOrientation { .. }
+            RefineError::Topology(_)
             | RefineError::IndexOutOfRange { .. }
             | RefineError::DegenerateFace { .. }
             | RefineError::NonFinitePosition { .. }
@@ -261,9 +265,7 @@ fn grade_failure(e: &PipelineError) -> GradeFailure {
                 // the cut panels are ours: a panel that is not a disc mesh, bad options, numerics
                 FlattenError::Empty
                 | FlattenError::IndexOutOfRange { .. }
-                | FlattenError::NonManifoldEdge { .. }
-                | FlattenError::InconsistentOrientation { .. }
-                | FlattenError::NonManifoldVertex { .. }
+                | FlattenError::Topology(_)
                 | FlattenError::Disconnected { .. }
                 | FlattenError::NotADisc { .. }
                 | FlattenError::SeamVertex { .. }

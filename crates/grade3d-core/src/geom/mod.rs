@@ -8,4 +8,5 @@ pub mod polyline;
 pub mod query;
 pub mod simplify;
 pub mod slice;
+pub mod topology;
 pub mod winding;

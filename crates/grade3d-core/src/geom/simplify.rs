@@ -102,6 +102,9 @@ use glam::{DMat3, DVec3};
 use serde::{Deserialize, Serialize};
 
 use crate::geom::mesh::{FaceId, MeshError, TriMesh, VertexId};
+use crate::geom::topology::{
+    check_edge_uses, check_vertex_fans, triangle_edge_uses, MeshEdge, TopologyError, UnionFind,
+};
 
 /// How boundary vertices may move.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -237,32 +240,10 @@ impl ManifoldStats {
 /// [`check_oriented_manifold`].
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SimplifyError {
-    /// An edge is shared by more than two triangles.
-    #[error("edge ({}, {}) is shared by {faces} triangles; the mesh is not edge-manifold", a.0, b.0)]
-    NonManifoldEdge {
-        /// Lower vertex id of the edge.
-        a: VertexId,
-        /// Higher vertex id of the edge.
-        b: VertexId,
-        /// Number of triangles on the edge.
-        faces: usize,
-    },
-    /// Two triangles use an edge in the same direction.
-    #[error("edge ({}, {}) is used twice in the same direction; the orientation is inconsistent", a.0, b.0)]
-    InconsistentOrientation {
-        /// Lower vertex id of the edge.
-        a: VertexId,
-        /// Higher vertex id of the edge.
-        b: VertexId,
-    },
-    /// The triangles around a vertex form more than one fan (a "bow tie").
-    #[error("the triangles around vertex {} form {fans} separate fans; the mesh is not vertex-manifold", vertex.0)]
-    NonManifoldVertex {
-        /// The vertex.
-        vertex: VertexId,
-        /// Number of fans around it.
-        fans: usize,
-    },
+    /// Not an oriented manifold: an edge of three or more triangles, one
+    /// run twice in the same direction, or a "bow tie" vertex.
+    #[error(transparent)]
+    Topology(#[from] TopologyError<MeshEdge>),
     /// Two triangles use the same three vertices.
     #[error("triangles {} and {} use the same three vertices", first.0, second.0)]
     DuplicateFace {
@@ -322,51 +303,21 @@ struct Analysis {
     stats: ManifoldStats,
 }
 
-fn find(parent: &mut [u32], mut x: u32) -> u32 {
-    while parent[x as usize] != x {
-        let p = parent[x as usize];
-        parent[x as usize] = parent[p as usize];
-        x = p;
-    }
-    x
-}
-
 fn analyse(mesh: &TriMesh) -> Result<Analysis, SimplifyError> {
     let tris = mesh.triangles();
     let n = mesh.vertex_count();
-    // Half-edges keyed by undirected edge; `forward` is true when lo → hi.
-    let mut half: Vec<(u32, u32, bool, u32)> = Vec::with_capacity(tris.len() * 3);
-    for (f, t) in tris.iter().enumerate() {
-        for k in 0..3 {
-            let (a, b) = (t[k].0, t[(k + 1) % 3].0);
-            half.push((a.min(b), a.max(b), a < b, f as u32));
-        }
-    }
-    half.sort_unstable();
-    let mut edges = Vec::with_capacity(half.len() / 2 + 1);
-    let mut boundary_halfedges = Vec::new();
-    let mut i = 0;
-    while i < half.len() {
-        let (lo, hi, fwd, face) = half[i];
-        let mut j = i + 1;
-        while j < half.len() && half[j].0 == lo && half[j].1 == hi {
-            j += 1;
-        }
-        match j - i {
-            1 => {
-                let (from, to) = if fwd { (lo, hi) } else { (hi, lo) };
-                boundary_halfedges.push((from, to, face));
-            }
-            2 => {
-                if half[i + 1].2 == fwd {
-                    return Err(SimplifyError::InconsistentOrientation { a: VertexId(lo), b: VertexId(hi) });
-                }
-            }
-            k => return Err(SimplifyError::NonManifoldEdge { a: VertexId(lo), b: VertexId(hi), faces: k }),
-        }
-        edges.push((lo, hi));
-        i = j;
-    }
+    let raw: Vec<[u32; 3]> = tris.iter().map(|t| t.map(|v| v.0)).collect();
+    let checked = check_edge_uses(triangle_edge_uses(&raw))?;
+    let edges: Vec<(u32, u32)> = checked.iter().map(|e| (e.edge.a.0, e.edge.b.0)).collect();
+    let boundary_halfedges: Vec<(u32, u32, u32)> = checked
+        .iter()
+        .filter(|e| e.second.is_none())
+        .map(|e| {
+            let (lo, hi) = (e.edge.a.0, e.edge.b.0);
+            let (from, to) = if e.first.forward { (lo, hi) } else { (hi, lo) };
+            (from, to, e.first.face.0)
+        })
+        .collect();
 
     // Duplicate triangles (same vertex set, any orientation).
     let mut keyed: Vec<([u32; 3], u32)> = tris
@@ -385,44 +336,15 @@ fn analyse(mesh: &TriMesh) -> Result<Analysis, SimplifyError> {
         }
     }
 
-    // Vertex fans: the link of each vertex must be one path or one cycle.
-    let mut start = vec![0u32; n + 1];
-    for t in tris {
-        for v in t {
-            start[v.idx() + 1] += 1;
+    // Vertex fans: the corners around each vertex must form one fan.
+    check_vertex_fans(&raw, n, &checked)?;
+    let mut referenced_vertex = vec![false; n];
+    for t in &raw {
+        for &v in t {
+            referenced_vertex[v as usize] = true;
         }
     }
-    for v in 0..n {
-        start[v + 1] += start[v];
-    }
-    let mut fill = start.clone();
-    let mut incident = vec![0u32; tris.len() * 3];
-    for (f, t) in tris.iter().enumerate() {
-        for v in t {
-            incident[fill[v.idx()] as usize] = f as u32;
-            fill[v.idx()] += 1;
-        }
-    }
-    let mut link: Vec<(u32, u32)> = Vec::new();
-    let mut referenced = 0usize;
-    for v in 0..n {
-        let fs = &incident[start[v] as usize..start[v + 1] as usize];
-        if fs.is_empty() {
-            continue;
-        }
-        referenced += 1;
-        link.clear();
-        for &f in fs {
-            let t = tris[f as usize];
-            let k = t.iter().position(|x| x.idx() == v).unwrap_or(0);
-            link.push((t[(k + 1) % 3].0, t[(k + 2) % 3].0));
-        }
-        link.sort_unstable();
-        let fans = count_fans(&link);
-        if fans != 1 {
-            return Err(SimplifyError::NonManifoldVertex { vertex: VertexId(v as u32), fans });
-        }
-    }
+    let referenced = referenced_vertex.iter().filter(|&&r| r).count();
 
     // Boundary loops: each boundary vertex has exactly one outgoing boundary half-edge.
     let mut next = vec![u32::MAX; n];
@@ -444,14 +366,11 @@ fn analyse(mesh: &TriMesh) -> Result<Analysis, SimplifyError> {
     }
 
     // Components.
-    let mut parent: Vec<u32> = (0..n as u32).collect();
+    let mut parts = UnionFind::new(n);
     for &(a, b) in &edges {
-        let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
-        if ra != rb {
-            parent[ra.max(rb) as usize] = ra.min(rb);
-        }
+        parts.union(a, b);
     }
-    let components = (0..n).filter(|&v| start[v + 1] > start[v] && find(&mut parent, v as u32) == v as u32).count();
+    let components = (0..n).filter(|&v| referenced_vertex[v] && parts.find(v as u32) == v as u32).count();
 
     let stats = ManifoldStats {
         vertices: referenced,
@@ -466,54 +385,14 @@ fn analyse(mesh: &TriMesh) -> Result<Analysis, SimplifyError> {
     Ok(Analysis { edges, boundary_halfedges, stats })
 }
 
-/// Number of connected pieces of a vertex link given as directed edges
-/// `(from, to)` sorted by `from`. In an oriented edge-manifold every link
-/// vertex has at most one outgoing and one incoming link edge, so the link is
-/// a disjoint union of paths and cycles.
-fn count_fans(link: &[(u32, u32)]) -> usize {
-    let k = link.len();
-    if link.windows(2).any(|w| w[0].0 == w[1].0) {
-        return k; // cannot happen after the edge checks; report as non-manifold
-    }
-    let mut used = vec![false; k];
-    let mut fans = 0;
-    // Paths start at a `from` that is nobody's `to`.
-    let mut tos: Vec<u32> = link.iter().map(|e| e.1).collect();
-    tos.sort_unstable();
-    let walk = |mut i: usize, used: &mut [bool]| {
-        while !used[i] {
-            used[i] = true;
-            match link.binary_search_by_key(&link[i].1, |e| e.0) {
-                Ok(j) => i = j,
-                Err(_) => break,
-            }
-        }
-    };
-    for (i, e) in link.iter().enumerate() {
-        if tos.binary_search(&e.0).is_err() {
-            fans += 1;
-            walk(i, &mut used);
-        }
-    }
-    for i in 0..k {
-        if !used[i] {
-            fans += 1;
-            walk(i, &mut used);
-        }
-    }
-    fans
-}
-
 /// Checks that `mesh` is an oriented 2-manifold, possibly with boundary, and
 /// returns its topological summary.
 ///
-/// Checks, in this order: every edge has one or two triangles
-/// ([`SimplifyError::NonManifoldEdge`]); an interior edge is used once in
-/// each direction ([`SimplifyError::InconsistentOrientation`]); no two
+/// Checks, in this order: every edge has one or two triangles, an interior
+/// edge is used once in each direction ([`crate::geom::topology`]); no two
 /// triangles share all three vertices ([`SimplifyError::DuplicateFace`]);
-/// the triangles around each vertex form one fan
-/// ([`SimplifyError::NonManifoldVertex`]). The first offending element in
-/// sorted id order is reported.
+/// the triangles around each vertex form one fan. The first offending
+/// element in sorted id order is reported.
 pub fn check_oriented_manifold(mesh: &TriMesh) -> Result<ManifoldStats, SimplifyError> {
     analyse(mesh).map(|a| a.stats)
 }
@@ -1446,12 +1325,16 @@ mod tests {
         // edge (0,1) shared by three triangles
         let p = vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z, DVec3::NEG_Y];
         let m = TriMesh::from_raw(p.clone(), &[[0, 1, 2], [1, 0, 3], [0, 1, 4]]).unwrap();
-        let want = SimplifyError::NonManifoldEdge { a: VertexId(0), b: VertexId(1), faces: 3 };
+        let want = SimplifyError::Topology(TopologyError::NonManifoldEdge { edge: MeshEdge::new(0, 1), faces: 3 });
         assert_eq!(check_oriented_manifold(&m).unwrap_err(), want);
         assert_eq!(simplify(&m, &[], &SimplifyOptions::default()).unwrap_err(), want);
         // edge (1,2) used twice in the direction 1 → 2
         let m = TriMesh::from_raw(p.clone(), &[[0, 1, 2], [3, 1, 2]]).unwrap();
-        let want = SimplifyError::InconsistentOrientation { a: VertexId(1), b: VertexId(2) };
+        let want = SimplifyError::Topology(TopologyError::InconsistentOrientation {
+            edge: MeshEdge::new(1, 2),
+            face_a: FaceId(0),
+            face_b: FaceId(1),
+        });
         assert_eq!(simplify(&m, &[], &SimplifyOptions::default()).unwrap_err(), want);
         assert_eq!(remesh_unrelated(&m, 10, &SimplifyOptions::default()).unwrap_err(), want);
         // bow tie: two triangles meeting at vertex 0 only
@@ -1459,7 +1342,7 @@ mod tests {
         let m = TriMesh::from_raw(p, &[[0, 1, 2], [0, 3, 4]]).unwrap();
         assert_eq!(
             check_oriented_manifold(&m).unwrap_err(),
-            SimplifyError::NonManifoldVertex { vertex: VertexId(0), fans: 2 }
+            SimplifyError::Topology(TopologyError::NonManifoldVertex { vertex: VertexId(0), fans: 2 })
         );
     }
 

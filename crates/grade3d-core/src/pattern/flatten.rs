@@ -140,6 +140,10 @@ use faer::sparse::{Argsort, FaerError, Pair, SparseColMat, SymbolicSparseColMat}
 use faer::traits::ComplexField;
 use faer::{c64, Conj, MatMut, Par, Side};
 use glam::{DVec2, DVec3};
+
+use crate::geom::topology::{
+    check_edge_uses, check_vertex_fans, triangle_edge_uses, MeshEdge, TopologyError, UnionFind,
+};
 use serde::{Deserialize, Serialize};
 
 /// Knobs of [`flatten`].
@@ -263,28 +267,10 @@ pub enum FlattenError {
         /// The triangle.
         face: u32,
     },
-    /// An edge is shared by more than two triangles.
-    #[error("edge {a}–{b} is shared by more than two triangles")]
-    NonManifoldEdge {
-        /// One end.
-        a: u32,
-        /// The other end.
-        b: u32,
-    },
-    /// The two triangles on an edge run it in the same direction.
-    #[error("the triangles on edge {a}–{b} are inconsistently oriented")]
-    InconsistentOrientation {
-        /// One end.
-        a: u32,
-        /// The other end.
-        b: u32,
-    },
-    /// The triangles around a vertex form more than one fan (a bow tie).
-    #[error("vertex {vertex} joins separate fans of triangles")]
-    NonManifoldVertex {
-        /// The vertex.
-        vertex: u32,
-    },
+    /// Not an oriented manifold (input vertex ids): an edge of three or more
+    /// triangles, one run twice in the same direction, or a "bow tie" vertex.
+    #[error(transparent)]
+    Topology(#[from] TopologyError<MeshEdge>),
     /// The triangles form more than one connected piece.
     #[error("vertex {vertex} is not connected to the piece of the first triangle")]
     Disconnected {
@@ -618,22 +604,6 @@ fn split_key(k: u64) -> (u32, u32) {
     ((k >> 32) as u32, k as u32)
 }
 
-/// Union–find root with path halving.
-fn find(parent: &mut [usize], mut x: usize) -> usize {
-    while parent[x] != x {
-        parent[x] = parent[parent[x]];
-        x = parent[x];
-    }
-    x
-}
-
-fn union(parent: &mut [usize], a: usize, b: usize) {
-    let (ra, rb) = (find(parent, a), find(parent, b));
-    if ra != rb {
-        parent[ra.max(rb)] = ra.min(rb);
-    }
-}
-
 /// The checked panel in compact numbering (referenced vertices only) and
 /// rescaled coordinates.
 struct Mesh {
@@ -721,59 +691,25 @@ impl Mesh {
             area += 0.5 * twice;
         }
 
-        // unique edges: boundary (one triangle), interior (two, opposite directions)
-        let mut keys: Vec<(u64, usize)> = Vec::with_capacity(3 * tris.len());
-        for (f, t) in tris.iter().enumerate() {
-            for k in 0..3 {
-                keys.push((edge_key(t[k], t[(k + 1) % 3]), 3 * f + k));
-            }
-        }
-        keys.sort_unstable();
-        let directed = |corner: usize| {
-            let t = tris[corner / 3];
-            (t[corner % 3], t[(corner % 3 + 1) % 3])
-        };
-        let mut fans: Vec<usize> = (0..3 * tris.len()).collect();
+        // unique edges: boundary (one triangle), interior (two, opposite directions); one fan
+        // per vertex. Errors name the input's vertex ids (compact ids grow with them).
+        let input_ids = |e: TopologyError<MeshEdge>| e.map_vertices(|v| verts[v as usize]);
+        let checked = check_edge_uses(triangle_edge_uses(&tris)).map_err(input_ids)?;
+        check_vertex_fans(&tris, n, &checked).map_err(input_ids)?;
         let mut next = vec![(u32::MAX, 0); n];
-        let mut unique_edges = 0i64;
-        for group in keys.chunk_by(|a, b| a.0 == b.0) {
-            unique_edges += 1;
-            let (i, j) = directed(group[0].1);
-            match group {
-                [(_, c)] => next[i as usize] = (j, *c),
-                [(_, ca), (_, cb)] => {
-                    if directed(*cb) == (i, j) {
-                        let [a, b] = [i, j].map(|v| verts[v as usize]);
-                        return Err(FlattenError::InconsistentOrientation { a: a.min(b), b: a.max(b) });
-                    }
-                    // corner ca sits at i and ca+1 at j; on the other side cb sits at j, cb+1 at i
-                    let step = |c: usize| 3 * (c / 3) + (c % 3 + 1) % 3;
-                    union(&mut fans, *ca, step(*cb));
-                    union(&mut fans, step(*ca), *cb);
-                }
-                _ => {
-                    let [a, b] = [i, j].map(|v| verts[v as usize]);
-                    return Err(FlattenError::NonManifoldEdge { a: a.min(b), b: a.max(b) });
-                }
-            }
+        for e in checked.iter().filter(|e| e.second.is_none()) {
+            let corner = 3 * e.first.face.idx() + usize::from(e.first.corner);
+            let t = tris[corner / 3];
+            next[t[corner % 3] as usize] = (t[(corner % 3 + 1) % 3], corner);
         }
-        let mut fan_of = vec![usize::MAX; n];
-        for c in 0..3 * tris.len() {
-            let root = find(&mut fans, c);
-            let v = tris[c / 3][c % 3] as usize;
-            if fan_of[v] == usize::MAX {
-                fan_of[v] = root;
-            } else if fan_of[v] != root {
-                return Err(FlattenError::NonManifoldVertex { vertex: verts[v] });
-            }
-        }
-        let mut pieces: Vec<usize> = (0..n).collect();
+        let unique_edges = checked.len() as i64;
+        let mut pieces = UnionFind::new(n);
         for t in &tris {
-            union(&mut pieces, t[0] as usize, t[1] as usize);
-            union(&mut pieces, t[0] as usize, t[2] as usize);
+            pieces.union(t[0], t[1]);
+            pieces.union(t[0], t[2]);
         }
-        let first = find(&mut pieces, tris[0][0] as usize);
-        if let Some(v) = (0..n).find(|&v| find(&mut pieces, v) != first) {
+        let first = pieces.find(tris[0][0]);
+        if let Some(v) = (0..n).find(|&v| pieces.find(v as u32) != first) {
             return Err(FlattenError::Disconnected { vertex: verts[v] });
         }
 
@@ -1890,13 +1826,31 @@ mod tests {
         assert_eq!(err(&line, &[[0, 1, 2]]), FlattenError::DegenerateTriangle { face: 0 });
         // three triangles on the edge 0–1
         let fin = [DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z, DVec3::NEG_Y];
-        assert_eq!(err(&fin, &[[0, 1, 2], [1, 0, 3], [1, 0, 4]]), FlattenError::NonManifoldEdge { a: 0, b: 1 });
+        let fin_edge =
+            |a, b| FlattenError::Topology(TopologyError::NonManifoldEdge { edge: MeshEdge::new(a, b), faces: 3 });
+        assert_eq!(err(&fin, &[[0, 1, 2], [1, 0, 3], [1, 0, 4]]), fin_edge(0, 1));
+        // named in the input's ids, not the compact numbering (vertex 0 is in no triangle)
+        let sparse = [DVec3::ONE, DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z, DVec3::NEG_Y];
+        assert_eq!(err(&sparse, &[[1, 2, 3], [2, 1, 4], [2, 1, 5]]), fin_edge(1, 2));
         // the second triangle runs 0 → 1 too
         let sq = [DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::NEG_Y];
-        assert_eq!(err(&sq, &[[0, 1, 2], [0, 1, 3]]), FlattenError::InconsistentOrientation { a: 0, b: 1 });
+        assert_eq!(
+            err(&sq, &[[0, 1, 2], [0, 1, 3]]),
+            FlattenError::Topology(TopologyError::InconsistentOrientation {
+                edge: MeshEdge::new(0, 1),
+                face_a: crate::geom::mesh::FaceId(0),
+                face_b: crate::geom::mesh::FaceId(1)
+            })
+        );
         // two triangles sharing only vertex 0 (a bow tie)
         let bow = [DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::NEG_X, DVec3::NEG_Y];
-        assert_eq!(err(&bow, &[[0, 1, 2], [0, 3, 4]]), FlattenError::NonManifoldVertex { vertex: 0 });
+        assert_eq!(
+            err(&bow, &[[0, 1, 2], [0, 3, 4]]),
+            FlattenError::Topology(TopologyError::NonManifoldVertex {
+                vertex: crate::geom::mesh::VertexId(0),
+                fans: 2
+            })
+        );
         // two separate triangles
         let two = [DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z, DVec3::Z + DVec3::X, DVec3::Z + DVec3::Y];
         assert_eq!(err(&two, &[[0, 1, 2], [3, 4, 5]]), FlattenError::Disconnected { vertex: 3 });

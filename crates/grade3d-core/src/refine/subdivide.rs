@@ -90,6 +90,7 @@
 
 use std::collections::BTreeMap;
 
+use crate::geom::topology::{check_edge_uses, triangle_edge_uses, MeshEdge, TopologyError};
 use crate::template::codec::CoarseMesh;
 use crate::template::profile::Profile;
 use glam::DVec3;
@@ -151,24 +152,10 @@ impl Default for RefineOptions {
 /// Why subdivision failed.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum RefineError {
-    /// An edge lies in more than two faces.
-    #[error("non-manifold edge {a}–{b}: in {faces} faces")]
-    NonManifoldEdge {
-        /// Smaller vertex id.
-        a: u32,
-        /// Larger vertex id.
-        b: u32,
-        /// Number of faces.
-        faces: usize,
-    },
-    /// Two faces traverse an edge in the same direction.
-    #[error("edge {a}–{b}: its two faces traverse it in the same direction (inconsistent orientation)")]
-    InconsistentOrientation {
-        /// Smaller vertex id.
-        a: u32,
-        /// Larger vertex id.
-        b: u32,
-    },
+    /// Not an oriented manifold: an edge of three or more faces, or one run
+    /// twice in the same direction.
+    #[error(transparent)]
+    Topology(#[from] TopologyError<MeshEdge>),
     /// A face names a vertex that does not exist.
     #[error("face {face} names vertex {vertex}, but there are {count} vertices")]
     IndexOutOfRange {
@@ -791,7 +778,6 @@ impl Topology {
         if let Some(v) = mesh.positions.iter().position(|p| !p.is_finite()) {
             return Err(RefineError::NonFinitePosition { vertex: v as u32 });
         }
-        let mut uses: BTreeMap<(u32, u32), Vec<(u32, u32)>> = BTreeMap::new();
         for (face, t) in mesh.triangles.iter().enumerate() {
             for k in 0..3 {
                 let v = t[k];
@@ -802,27 +788,20 @@ impl Topology {
                     return Err(RefineError::DegenerateFace { face, vertex: v });
                 }
             }
-            for k in 0..3 {
-                let (a, b) = (t[k], t[(k + 1) % 3]);
-                uses.entry((a.min(b), a.max(b))).or_default().push((a, b));
-            }
         }
         let mut edges = BTreeMap::new();
         let mut neighbours = vec![Vec::new(); n];
         let (mut next, mut prev) = (vec![None; n], vec![None; n]);
         let (mut out_count, mut in_count) = (vec![0usize; n], vec![0usize; n]);
-        for (&(a, b), list) in &uses {
-            if list.len() > 2 {
-                return Err(RefineError::NonManifoldEdge { a, b, faces: list.len() });
-            }
-            if list.len() == 2 && list[0] == list[1] {
-                return Err(RefineError::InconsistentOrientation { a, b });
-            }
-            let (tail, head) = list[0];
-            edges.insert((a, b), EdgeUse { faces: list.len(), tail, head });
+        for e in check_edge_uses(triangle_edge_uses(&mesh.triangles))? {
+            let (a, b) = (e.edge.a.0, e.edge.b.0);
+            // the direction of the first face's use (the boundary's, on a boundary edge)
+            let (tail, head) = if e.first.forward { (a, b) } else { (b, a) };
+            let faces = 1 + usize::from(e.second.is_some());
+            edges.insert((a, b), EdgeUse { faces, tail, head });
             neighbours[a as usize].push(b);
             neighbours[b as usize].push(a);
-            if list.len() == 1 {
+            if faces == 1 {
                 next[tail as usize] = Some(head);
                 out_count[tail as usize] += 1;
                 prev[head as usize] = Some(tail);
@@ -1252,12 +1231,15 @@ mod tests {
             edge_profiles: BTreeMap::new(),
         };
         let err = split(&bad).expect_err("non-manifold");
-        assert_eq!(err, RefineError::NonManifoldEdge { a: 0, b: 1, faces: 3 });
+        assert_eq!(err, RefineError::Topology(TopologyError::NonManifoldEdge { edge: MeshEdge::new(0, 1), faces: 3 }));
         assert!(err.to_string().contains("0–1"), "{err}");
         assert_eq!(refine(bad.clone(), &RefineOptions::default(), no_hook).unwrap_err(), err);
         assert_eq!(fair(&mut bad.clone(), &RefineOptions::default()).unwrap_err(), err);
         let mut m = RefineMesh { triangles: vec![[0, 1, 2], [0, 1, 3]], ..bad.clone() };
-        assert_eq!(split(&m).unwrap_err(), RefineError::InconsistentOrientation { a: 0, b: 1 });
+        assert!(matches!(
+            split(&m).unwrap_err(),
+            RefineError::Topology(TopologyError::InconsistentOrientation { edge, .. }) if edge == MeshEdge::new(0, 1)
+        ));
         m.triangles = vec![[0, 1, 9]];
         assert_eq!(split(&m).unwrap_err(), RefineError::IndexOutOfRange { face: 0, vertex: 9, count: 5 });
         m.triangles = vec![[0, 1, 1]];

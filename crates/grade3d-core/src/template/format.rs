@@ -25,6 +25,8 @@ use std::collections::{BTreeMap, BTreeSet};
 use serde::{Deserialize, Serialize};
 
 use crate::body::vocab::{CurveId, PointId, VOCABULARY_VERSION};
+use crate::geom::mesh::FaceId;
+use crate::geom::topology::{check_edge_uses, EdgeUse, TopologyError};
 
 /// Version of the template schema this build reads and writes.
 pub const SCHEMA_VERSION: u32 = 1;
@@ -376,24 +378,10 @@ pub enum TemplateError {
         /// The face.
         face: u32,
     },
-    /// An edge used by more than two faces.
-    #[error("edge {edge} is shared by {faces} faces (non-manifold)")]
-    NonManifoldEdge {
-        /// The edge.
-        edge: u32,
-        /// How many faces use it.
-        faces: usize,
-    },
-    /// Two faces run an edge in the same direction.
-    #[error("edge {edge} is run in the same direction by faces {face_a} and {face_b} (inconsistent orientation)")]
-    InconsistentOrientation {
-        /// The edge.
-        edge: u32,
-        /// First face.
-        face_a: u32,
-        /// Second face.
-        face_b: u32,
-    },
+    /// Not an oriented manifold: a template edge (by id) of three or more
+    /// faces, or one run twice in the same direction.
+    #[error(transparent)]
+    Topology(#[from] TopologyError<u32>),
     /// A panel, seam, notch or grain line refers to something missing.
     #[error("{element}: {reason}")]
     BadReference {
@@ -522,7 +510,7 @@ impl Template {
             }
         }
         // faces: edges exist, form a directed triangle; edge use counts
-        let mut uses: BTreeMap<u32, Vec<(u32, i8)>> = BTreeMap::new();
+        let mut uses: Vec<(u32, EdgeUse)> = Vec::with_capacity(3 * self.faces.len());
         for (f, face) in self.faces.iter().enumerate() {
             let fid = f as u32;
             for &e in &face.edges {
@@ -546,17 +534,11 @@ impl Template {
                 return Err(TemplateError::InconsistentDirections { face: fid });
             }
             for k in 0..3 {
-                uses.entry(face.edges[k]).or_default().push((fid, face.directions[k]));
+                let forward = face.directions[k] > 0;
+                uses.push((face.edges[k], EdgeUse { face: FaceId(fid), corner: k as u8, forward }));
             }
         }
-        for (&edge, u) in &uses {
-            if u.len() > 2 {
-                return Err(TemplateError::NonManifoldEdge { edge, faces: u.len() });
-            }
-            if u.len() == 2 && u[0].1 == u[1].1 {
-                return Err(TemplateError::InconsistentOrientation { edge, face_a: u[0].0, face_b: u[1].0 });
-            }
-        }
+        check_edge_uses(uses)?;
         // panels
         let mut names = BTreeSet::new();
         let mut owner: BTreeMap<u32, &str> = BTreeMap::new();
@@ -785,7 +767,7 @@ mod tests {
         t.faces.push(Face { edges: [0, 4, 3], directions: [-1, 1, -1] });
         t.faces.push(Face { edges: [0, 6, 5], directions: [-1, 1, -1] });
         t.panels[0].faces = vec![0, 1, 2];
-        assert_eq!(t.validate(), Err(TemplateError::NonManifoldEdge { edge: 0, faces: 3 }));
+        assert_eq!(t.validate(), Err(TemplateError::Topology(TopologyError::NonManifoldEdge { edge: 0, faces: 3 })));
     }
 
     #[test]
@@ -796,7 +778,14 @@ mod tests {
         t.edges.push(Edge { start: 0, end: 3, profile: vec![] });
         t.faces.push(Face { edges: [0, 3, 4], directions: [1, 1, -1] });
         t.panels[0].faces = vec![0, 1];
-        assert_eq!(t.validate(), Err(TemplateError::InconsistentOrientation { edge: 0, face_a: 0, face_b: 1 }));
+        assert_eq!(
+            t.validate(),
+            Err(TemplateError::Topology(TopologyError::InconsistentOrientation {
+                edge: 0,
+                face_a: FaceId(0),
+                face_b: FaceId(1)
+            }))
+        );
     }
 
     #[test]
