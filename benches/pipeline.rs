@@ -50,8 +50,15 @@ fn benches(c: &mut Criterion) {
     });
     g.bench_function("pattern_only", |b| {
         b.iter(|| {
-            pattern(&t, &graded.mesh.positions, &graded.mesh.triangles, 3, "reference", &PatternOptions::default())
-                .expect("pattern")
+            pattern(
+                &t,
+                &graded.mesh.positions,
+                &graded.mesh.triangles,
+                &graded.lineage,
+                "reference",
+                &PatternOptions::default(),
+            )
+            .expect("pattern")
         })
     });
     if let Some(ob) = &obstacle {

@@ -34,7 +34,7 @@ fn benches(c: &mut Criterion) {
         g.bench_function("levels_3_with_collision", |b| {
             b.iter(|| {
                 let mut collider = Collider::new(&maps, CollisionOptions::default());
-                let (mut fine, _) = refine(coarse.clone(), &opts, |p, h| collider.after_sweep(p, h)).expect("refine");
+                let mut fine = refine(coarse.clone(), &opts, |p, h| collider.after_sweep(p, h)).expect("refine").mesh;
                 collider.settle(&tree, &mut fine.positions, &fine.fixed);
                 fine
             })

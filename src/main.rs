@@ -387,8 +387,7 @@ fn write_panels(dir: &std::path::Path) -> Result<(), Box<dyn std::error::Error>>
     };
     for t in grade3d::template::library::builtin().map_err(|(name, e)| format!("template {name}: {e}"))? {
         let g = grade3d::pipeline::grade(&t, &body, obstacle.as_ref(), "reference", &Default::default())?;
-        let levels = t.defaults.levels as usize;
-        let (panels, _, _) = grade3d::pattern::panels::cut(&t, &g.mesh.positions, &g.mesh.triangles, levels)?;
+        let (panels, _) = grade3d::pattern::panels::cut(&t, &g.mesh.positions, &g.mesh.triangles, &g.lineage)?;
         for p in panels {
             let path = dir.join(format!("{}-{}.obj", t.name, p.name));
             std::fs::write(&path, grade3d::io::obj::write_obj(&p.positions, None, &p.triangles))?;

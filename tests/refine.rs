@@ -9,7 +9,7 @@ use grade3d::collide::depth::{inside, ViewSet};
 use grade3d::collide::render::{GpuContext, RenderOptions};
 use grade3d::geom::winding::{penetration_stats, WindingOptions, WindingTree};
 use grade3d::refine::collision::{Collider, CollisionOptions};
-use grade3d::refine::subdivide::{refine, RefineMesh, RefineOptions};
+use grade3d::refine::subdivide::{refine, RefineMesh, RefineOptions, Refined};
 use grade3d::template::codec::decode;
 use grade3d::template::format::Relocation;
 use grade3d::template::library::builtin;
@@ -36,7 +36,7 @@ fn library_on_every_body_stays_outside() {
             let edges: Vec<(u32, u32)> = t.edges.iter().map(|e| (e.start, e.end)).collect();
             let opts = RefineOptions::default();
             let mut collider = Collider::new(&maps, CollisionOptions::default());
-            let (mut on, reports) =
+            let Refined { mesh: mut on, levels: reports, .. } =
                 refine(RefineMesh::from_coarse(&m0, &edges).unwrap(), &opts, |p, f| collider.after_sweep(p, f))
                     .unwrap();
             assert!(
@@ -48,7 +48,8 @@ fn library_on_every_body_stays_outside() {
             worst_update = worst_update.max(reports.iter().map(|r| r.final_update_rel).fold(0.0, f64::max));
             held += reports.iter().map(|r| r.held).sum::<usize>();
             assert_eq!(on.triangles.len(), m0.triangles.len() * 64, "{}: 3 levels multiply faces by 4^3", t.name);
-            let (off, free_reports) = refine(RefineMesh::from_coarse(&m0, &edges).unwrap(), &opts, |_, _| {}).unwrap();
+            let Refined { mesh: off, levels: free_reports, .. } =
+                refine(RefineMesh::from_coarse(&m0, &edges).unwrap(), &opts, |_, _| {}).unwrap();
             assert!(
                 free_reports.iter().all(|r| r.converged),
                 "{} on {name}: fairing did not converge: {free_reports:?}",

@@ -28,7 +28,10 @@ use crate::collide::Obstacle;
 use crate::pattern::garment::{pattern_with_plan, DartPlan, GarmentPattern, PatternError, PatternOptions};
 use crate::refine::clear::{clear_coarse, clear_surface, ClearError, ClearOptions};
 use crate::refine::collision::{Collider, CollisionOptions, CollisionReport};
-use crate::refine::subdivide::{refine, relax_tangentially, LevelReport, RefineError, RefineMesh, RefineOptions};
+use crate::refine::lineage::Lineage;
+use crate::refine::subdivide::{
+    refine, relax_tangentially, LevelReport, RefineError, RefineMesh, RefineOptions, Refined,
+};
 use crate::refine::symmetry::{symmetrize, SymmetryOptions, Topology};
 use crate::template::codec::{decode, CodecError};
 use crate::template::format::Template;
@@ -136,6 +139,9 @@ pub struct Graded {
     pub mesh: RefineMesh,
     /// Fairing per level.
     pub levels: Vec<LevelReport>,
+    /// Which vertex each level's split put on each edge (the panels and
+    /// seams are cut by it).
+    pub lineage: Lineage,
     /// What collision avoidance did (zeros without an obstacle).
     pub collision: CollisionReport,
     /// The sewing pattern.
@@ -264,10 +270,11 @@ pub fn grade_with_plan(
     let decode_ms = ms(start) - coarse_ms;
 
     let start = Instant::now();
-    let (mesh, level_reports, collision) = match obstacle {
+    let (mesh, level_reports, lineage, collision) = match obstacle {
         Some(ob) => {
             let mut collider = Collider::new(&ob.maps, collision_opts);
-            let (mut mesh, reports) = refine(coarse, &refine_opts, |p, h| collider.after_sweep(p, h))?;
+            let Refined { mut mesh, levels: reports, lineage } =
+                refine(coarse, &refine_opts, |p, h| collider.after_sweep(p, h))?;
             relax_tangentially(&mut mesh, refine_opts.relax_sweeps, refine_opts.relax_step)?;
             collider.settle(&ob.tree, &mut mesh.positions, &mesh.fixed);
             collider.settle_fixed(&ob.tree, &mut mesh.positions, &mesh.fixed, &opts.clear);
@@ -284,12 +291,12 @@ pub fn grade_with_plan(
                 &opts.clear,
             );
             surface_ms = ms(surface_start);
-            (mesh, reports, report)
+            (mesh, reports, lineage, report)
         }
         None => {
-            let (mut mesh, reports) = refine(coarse, &refine_opts, |_, _| {})?;
+            let Refined { mut mesh, levels: reports, lineage } = refine(coarse, &refine_opts, |_, _| {})?;
             relax_tangentially(&mut mesh, refine_opts.relax_sweeps, refine_opts.relax_step)?;
-            (mesh, reports, CollisionReport::default())
+            (mesh, reports, lineage, CollisionReport::default())
         }
     };
     let refine_ms = ms(start);
@@ -300,7 +307,7 @@ pub fn grade_with_plan(
     let topology = Topology { triangles: &mesh.triangles, nodes: &decoded };
     let symmetric = symmetrize(t, body, cut_from, Some(topology), &opts.symmetry);
     let cut_from = symmetric.as_deref().unwrap_or(cut_from);
-    let pattern = pattern_with_plan(t, cut_from, &mesh.triangles, levels, size, &pattern_opts, plan)?;
+    let pattern = pattern_with_plan(t, cut_from, &mesh.triangles, &lineage, size, &pattern_opts, plan)?;
     let pattern_ms = ms(start);
     let girth_lines = girth_lines(t, body, &decoded, &hung, &mesh);
     let cut_positions = cut_from.to_vec();
@@ -309,6 +316,7 @@ pub fn grade_with_plan(
         girth_lines,
         mesh,
         levels: level_reports,
+        lineage,
         collision,
         pattern,
         expected_ease_mm,

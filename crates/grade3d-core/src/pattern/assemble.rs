@@ -50,10 +50,11 @@ use std::collections::{BTreeMap, HashSet};
 use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
-use super::panels::{Lineage, Panel, SeamChain};
+use super::panels::{Panel, SeamChain};
 use super::piece::{GradePoint, GradePointKind, InternalLine, PatternPiece, PieceNotch};
 use crate::body::vocab::{point_def, CurveId, PointId};
 use crate::geom::polyline::segment_crosses_polygon;
+use crate::refine::lineage::Lineage;
 use crate::template::format::Template;
 use crate::template::girth::RING_PLANE_TOLERANCE_M;
 

@@ -64,6 +64,7 @@ use super::grade::{mirror_difference, MirrorDifference};
 use super::panels::{cut, Panel, PanelError, SeamChain};
 use super::piece::PatternPiece;
 use crate::geom::plane::Plane;
+use crate::refine::lineage::Lineage;
 use crate::template::format::Template;
 
 /// Knobs of the pattern stage.
@@ -280,7 +281,7 @@ pub struct GarmentPattern {
 }
 
 /// The pattern of the fine mesh (`positions` in metres, `triangles`) that
-/// `levels` levels of subdivision made of template `t` (module docs), its
+/// the refinement made of template `t`, with its `lineage` (module docs), its
 /// darts decided here ([`pattern_with_plan`] without a plan).
 ///
 /// # Errors
@@ -289,11 +290,11 @@ pub fn pattern(
     t: &Template,
     positions: &[DVec3],
     triangles: &[[u32; 3]],
-    levels: usize,
+    lineage: &Lineage,
     size: &str,
     opts: &PatternOptions,
 ) -> Result<GarmentPattern, PatternError> {
-    pattern_with_plan(t, positions, triangles, levels, size, opts, None)
+    pattern_with_plan(t, positions, triangles, lineage, size, opts, None)
 }
 
 /// [`pattern`] with the darts of `plan` when given (a size of a run whose
@@ -312,12 +313,12 @@ pub fn pattern_with_plan(
     t: &Template,
     positions: &[DVec3],
     triangles: &[[u32; 3]],
-    levels: usize,
+    lineage: &Lineage,
     size: &str,
     opts: &PatternOptions,
     plan: Option<&DartPlan>,
 ) -> Result<GarmentPattern, PatternError> {
-    let mut g = pattern_darts(t, positions, triangles, levels, size, opts, plan)?;
+    let mut g = pattern_darts(t, positions, triangles, lineage, size, opts, plan)?;
     pair_pieces(t, &mut g, plan.map(|p| p.cut_pairs.as_slice()), opts);
     Ok(g)
 }
@@ -375,7 +376,7 @@ fn pattern_darts(
     t: &Template,
     positions: &[DVec3],
     triangles: &[[u32; 3]],
-    levels: usize,
+    lineage: &Lineage,
     size: &str,
     opts: &PatternOptions,
     plan: Option<&DartPlan>,
@@ -383,14 +384,14 @@ fn pattern_darts(
     let mut tt = t.clone();
     if let Some(plan) = plan {
         tt.darts.retain(|d| !plan.left_out.iter().any(|(name, _)| *name == d.name));
-        let (mut g, _) = pattern_once(&tt, positions, triangles, levels, size, opts, Search::Carry(&plan.found))?;
+        let (mut g, _) = pattern_once(&tt, positions, triangles, lineage, size, opts, Search::Carry(&plan.found))?;
         g.darts_left_out = plan.left_out.clone();
         g.dart_plan.left_out = plan.left_out.clone();
         return Ok(g);
     }
     let mut left_out = Vec::new();
     loop {
-        let (mut g, darts) = pattern_once(&tt, positions, triangles, levels, size, opts, Search::None)?;
+        let (mut g, darts) = pattern_once(&tt, positions, triangles, lineage, size, opts, Search::None)?;
         // the worst dart that does not open (or opens inverted) goes, and the pattern is made again
         let worst = darts
             .iter()
@@ -412,7 +413,7 @@ fn pattern_darts(
                 // the declared darts are settled: darts where a piece still strains
                 let target = opts.auto_darts.target_strain_p95;
                 if opts.auto_darts.enabled && g.reports.iter().any(|r| r.distortion.strain_p95 > target) {
-                    g = pattern_once(&tt, positions, triangles, levels, size, opts, Search::Find)?.0;
+                    g = pattern_once(&tt, positions, triangles, lineage, size, opts, Search::Find)?.0;
                 }
                 g.dart_plan.left_out = left_out.clone();
                 g.darts_left_out = left_out;
@@ -609,13 +610,13 @@ fn pattern_once(
     t: &Template,
     positions: &[DVec3],
     triangles: &[[u32; 3]],
-    levels: usize,
+    lineage: &Lineage,
     size: &str,
     opts: &PatternOptions,
     search: Search<'_>,
 ) -> Result<(GarmentPattern, Vec<DartCheck>), PatternError> {
     let find_darts = matches!(search, Search::Find);
-    let (cut_panels, seams, lineage) = cut(t, positions, triangles, levels)?;
+    let (cut_panels, seams) = cut(t, positions, triangles, lineage)?;
     let n_nodes = t.nodes.len() as u32;
     // darts where a piece strains, searched with the seams free when they are negotiated afterwards;
     // per panel at most `cap` of them, lowered when the negotiated flattening of the darted panel
@@ -721,7 +722,7 @@ fn pattern_once(
         for (i, ((panel, found_darts), flat)) in panels.iter().zip(found_darts).zip(flats).enumerate() {
             let flat = flat?;
             let d = distortion(&panel.positions, &panel.triangles, &flat.uv);
-            let p = assemble(t, panel, &seams, &lineage, &flat.uv, size, &opts.piece)?;
+            let p = assemble(t, panel, &seams, lineage, &flat.uv, size, &opts.piece)?;
             let sew_line_self_intersects = self_intersects(&p.piece.sew_line);
             let cut_line_self_intersects = self_intersects(&p.piece.cut_line);
             // found darts that leave a line of the piece unclean (issue #14, item 5: legs that cross
@@ -1056,7 +1057,7 @@ fn waist_deviation(t: &Template, panel: &super::panels::Panel, piece: &PatternPi
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::refine::subdivide::{refine, RefineMesh, RefineOptions};
+    use crate::refine::subdivide::{refine, RefineMesh, RefineOptions, Refined};
     use crate::template::codec::decode;
     use crate::template::format::Relocation;
     use crate::template::library::{builtin, reference_body};
@@ -1079,11 +1080,11 @@ mod tests {
         let m0 = decode(&t, &body, Relocation::Eq1Frame).expect("decode");
         let edges: Vec<(u32, u32)> = t.edges.iter().map(|e| (e.start, e.end)).collect();
         let coarse = RefineMesh::from_coarse(&m0, &edges).expect("coarse");
-        let (fine, _) = refine(coarse, &RefineOptions::default(), |_, _| {}).expect("refine");
-        let with =
-            pattern(&t, &fine.positions, &fine.triangles, 3, "ref", &PatternOptions::default()).expect("pattern");
-        let without =
-            pattern(&plain, &fine.positions, &fine.triangles, 3, "ref", &PatternOptions::default()).expect("pattern");
+        let Refined { mesh: fine, lineage, .. } = refine(coarse, &RefineOptions::default(), |_, _| {}).expect("refine");
+        let with = pattern(&t, &fine.positions, &fine.triangles, &lineage, "ref", &PatternOptions::default())
+            .expect("pattern");
+        let without = pattern(&plain, &fine.positions, &fine.triangles, &lineage, "ref", &PatternOptions::default())
+            .expect("pattern");
         assert!(with.darts_left_out.is_empty(), "{:?}", with.darts_left_out);
         let back = |g: &GarmentPattern| g.reports.iter().find(|r| r.name == "back").cloned().expect("back");
         let (b1, b0) = (back(&with), back(&without));
@@ -1108,13 +1109,14 @@ mod tests {
         let m0 = decode(&t, &body, Relocation::Eq1Frame).expect("decode");
         let edges: Vec<(u32, u32)> = t.edges.iter().map(|e| (e.start, e.end)).collect();
         let coarse = RefineMesh::from_coarse(&m0, &edges).expect("coarse");
-        let (fine, _) = refine(coarse, &RefineOptions::default(), |_, _| {}).expect("refine");
+        let Refined { mesh: fine, lineage, .. } = refine(coarse, &RefineOptions::default(), |_, _| {}).expect("refine");
         let plain = PatternOptions {
             auto_darts: AutoDartOptions { enabled: false, ..Default::default() },
             ..Default::default()
         };
         let held = PatternOptions { negotiate_seams: false, ..plain };
-        let run = |o: &PatternOptions| pattern(&t, &fine.positions, &fine.triangles, 3, "ref", o).expect("pattern");
+        let run =
+            |o: &PatternOptions| pattern(&t, &fine.positions, &fine.triangles, &lineage, "ref", o).expect("pattern");
         let (negotiated, at_3d) = (run(&plain), run(&held));
         for s in &negotiated.seams {
             assert!(s.mismatch_mm < 1e-2 && s.notch_mismatch_mm < 1e-2, "{s:?}");
@@ -1143,19 +1145,19 @@ mod tests {
         let m0 = decode(&t, &body, Relocation::Eq1Frame).expect("decode");
         let edges: Vec<(u32, u32)> = t.edges.iter().map(|e| (e.start, e.end)).collect();
         let coarse = RefineMesh::from_coarse(&m0, &edges).expect("coarse");
-        let (fine, _) = refine(coarse, &RefineOptions::default(), |_, _| {}).expect("refine");
+        let Refined { mesh: fine, lineage, .. } = refine(coarse, &RefineOptions::default(), |_, _| {}).expect("refine");
         let opts = PatternOptions {
             auto_darts: AutoDartOptions { target_strain_p95: 0.0, parallel: false, ..Default::default() },
             ..Default::default()
         };
-        let found = pattern(&t, &fine.positions, &fine.triangles, 3, "ref", &opts).expect("pattern");
+        let found = pattern(&t, &fine.positions, &fine.triangles, &lineage, "ref", &opts).expect("pattern");
         let plan = found.dart_plan.clone();
         assert!(!plan.found.is_empty(), "a zero target finds darts");
         for r in &found.reports {
             assert!(r.found_darts.len() <= 2, "{}: at most two found darts per piece by default", r.name);
         }
-        let carried =
-            pattern_with_plan(&t, &fine.positions, &fine.triangles, 3, "ref", &opts, Some(&plan)).expect("carried");
+        let carried = pattern_with_plan(&t, &fine.positions, &fine.triangles, &lineage, "ref", &opts, Some(&plan))
+            .expect("carried");
         assert_eq!(carried.dart_plan, plan);
         for (a, b) in found.pieces.iter().zip(&carried.pieces) {
             assert_eq!(a.name, b.name);
@@ -1166,7 +1168,8 @@ mod tests {
         // a chain that is not a line of the panel is a typed error, not a panic
         let mut bad = plan.clone();
         bad.found[0].chain = vec![u32::MAX, 0];
-        let e = pattern_with_plan(&t, &fine.positions, &fine.triangles, 3, "ref", &opts, Some(&bad)).unwrap_err();
+        let e =
+            pattern_with_plan(&t, &fine.positions, &fine.triangles, &lineage, "ref", &opts, Some(&bad)).unwrap_err();
         assert!(matches!(e, PatternError::CarriedDart { .. }), "{e}");
     }
 }

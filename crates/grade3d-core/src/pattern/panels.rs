@@ -14,8 +14,8 @@
 //! * coarse node `i` is fine vertex `i`;
 //! * the fine chain along the coarse edge `(a, b)` is
 //!   `chain(a, b) = chain(a, m) ⧺ chain(m, b)` with `m` the split vertex of
-//!   `(a, b)`, replayed level by level from the coarse triangles alone
-//!   ([`Lineage`]).
+//!   `(a, b)`, as the refinement recorded it ([`Lineage`]; issue #16: no
+//!   longer replayed here from the coarse triangles).
 //!
 //! **Panels.** Each [`Panel`] is the sub-mesh of its fine faces with its own
 //! vertex numbering (`global[local]`), so vertices on a seam are duplicated
@@ -23,9 +23,9 @@
 //! the faces' orientation (counter-clockwise seen from outside). Seams are
 //! the fine chains of the template seam's coarse edges, in order.
 //!
-//! **Preconditions.** The fine mesh is what [`crate::refine::subdivide::refine`]
-//! made of the template's coarse mesh in `levels` levels (face count
-//! `4^levels ×` the template's). **Failure modes**: [`PanelError`] naming the
+//! **Preconditions.** The fine mesh and its lineage are what
+//! [`crate::refine::subdivide::refine`] made of the template's coarse mesh
+//! (face count `4^L ×` the template's, `L` the lineage's levels). **Failure modes**: [`PanelError`] naming the
 //! panel, seam or edge — face count mismatch, a panel that is not a disc
 //! (not exactly one boundary loop), a seam edge not on both panels'
 //! outlines, a seam whose edges do not chain.
@@ -35,7 +35,7 @@ use std::collections::HashMap;
 use glam::DVec3;
 
 use crate::geom::mesh::boundary_loops;
-use crate::refine::subdivide::edge_keys;
+use crate::refine::lineage::Lineage;
 use crate::template::format::Template;
 
 /// Why a panel could not be cut out.
@@ -97,58 +97,6 @@ pub enum PanelError {
         /// Panel name.
         panel: String,
     },
-}
-
-/// The split vertices of every level, replayed from the coarse triangles.
-#[derive(Debug, Clone)]
-pub struct Lineage {
-    /// Per level `j = 0 … L−1`: the split vertex of each undirected edge `(min, max)` of `M_j`.
-    midpoints: Vec<HashMap<(u32, u32), u32>>,
-}
-
-impl Lineage {
-    /// Replays `levels` splits of `coarse` (`n_coarse` vertices).
-    pub fn new(coarse: &[[u32; 3]], n_coarse: usize, levels: usize) -> Self {
-        let mut triangles = coarse.to_vec();
-        let mut n = n_coarse as u32;
-        let mut midpoints = Vec::with_capacity(levels);
-        for _ in 0..levels {
-            let keys = edge_keys(&triangles);
-            let mids: HashMap<(u32, u32), u32> = keys.iter().enumerate().map(|(k, &e)| (e, n + k as u32)).collect();
-            let mid = |a: u32, b: u32| mids[&(a.min(b), a.max(b))];
-            triangles = triangles
-                .iter()
-                .flat_map(|&[a, b, c]| {
-                    let (ab, bc, ca) = (mid(a, b), mid(b, c), mid(c, a));
-                    [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]
-                })
-                .collect();
-            n += keys.len() as u32;
-            midpoints.push(mids);
-        }
-        Self { midpoints }
-    }
-
-    /// Levels replayed.
-    pub fn levels(&self) -> usize {
-        self.midpoints.len()
-    }
-
-    /// The fine vertices along the coarse edge `a → b`, `a` first and `b` last
-    /// (`2^L + 1` of them); `None` if `(a, b)` is not an edge of the coarse mesh.
-    pub fn chain(&self, a: u32, b: u32) -> Option<Vec<u32>> {
-        let mut chain = vec![a, b];
-        for mids in &self.midpoints {
-            let mut next = Vec::with_capacity(2 * chain.len() - 1);
-            for w in chain.windows(2) {
-                next.push(w[0]);
-                next.push(*mids.get(&(w[0].min(w[1]), w[0].max(w[1])))?);
-            }
-            next.push(*chain.last()?);
-            chain = next;
-        }
-        Some(chain)
-    }
 }
 
 /// One panel cut out of the fine mesh.
@@ -276,8 +224,8 @@ pub struct SeamChain {
     pub chain: Vec<u32>,
 }
 
-/// Cuts the fine mesh (`positions`, `triangles`) of `levels` levels of the
-/// template `t` into its panels and seams (module docs).
+/// Cuts the fine mesh (`positions`, `triangles`) the refinement made of the
+/// template `t`, with its `lineage`, into its panels and seams (module docs).
 ///
 /// # Errors
 /// [`PanelError`] (module docs).
@@ -285,15 +233,15 @@ pub fn cut(
     t: &Template,
     positions: &[DVec3],
     triangles: &[[u32; 3]],
-    levels: usize,
-) -> Result<(Vec<Panel>, Vec<SeamChain>, Lineage), PanelError> {
-    let coarse: Vec<[u32; 3]> = (0..t.faces.len()).map(|f| t.face_nodes(f)).collect();
+    lineage: &Lineage,
+) -> Result<(Vec<Panel>, Vec<SeamChain>), PanelError> {
+    let levels = lineage.levels();
+    let coarse_faces = t.faces.len();
     let per = 1usize << (2 * levels);
-    let expected = coarse.len() * per;
+    let expected = coarse_faces * per;
     if triangles.len() != expected {
-        return Err(PanelError::FaceCount { fine: triangles.len(), coarse: coarse.len(), levels, expected });
+        return Err(PanelError::FaceCount { fine: triangles.len(), coarse: coarse_faces, levels, expected });
     }
-    let lineage = Lineage::new(&coarse, t.nodes.len(), levels);
     let mut panels = Vec::with_capacity(t.panels.len());
     for (index, p) in t.panels.iter().enumerate() {
         let fine: Vec<[u32; 3]> =
@@ -306,7 +254,7 @@ pub fn cut(
         let unique = global.len();
         let mut darts = Vec::new();
         for d in t.darts.iter().filter(|d| d.panel == p.name) {
-            let chain = seam_chain(t, &lineage, &d.name, &d.edges).map_err(|_| PanelError::BadDart {
+            let chain = seam_chain(t, lineage, &d.name, &d.edges).map_err(|_| PanelError::BadDart {
                 dart: d.name.clone(),
                 reason: "its edges do not meet end to end".into(),
             })?;
@@ -350,7 +298,7 @@ pub fn cut(
                 .ok_or_else(|| PanelError::UnknownPanel { seam: s.name.clone(), panel: name.to_string() })
         };
         let (a, b) = (find(&s.panel_a)?, find(&s.panel_b)?);
-        let chain = seam_chain(t, &lineage, s.name.as_str(), &s.edges)?;
+        let chain = seam_chain(t, lineage, s.name.as_str(), &s.edges)?;
         for &pi in &[a, b] {
             let panel = &panels[pi];
             let on_outline: std::collections::HashSet<u32> =
@@ -370,7 +318,7 @@ pub fn cut(
         }
         seams.push(SeamChain { name: s.name.clone(), panel_a: a, panel_b: b, chain });
     }
-    Ok((panels, seams, lineage))
+    Ok((panels, seams))
 }
 
 /// Slits the triangles along `chain` (local ids, from a boundary vertex to an
@@ -482,7 +430,7 @@ fn seam_chain(t: &Template, lineage: &Lineage, seam: &str, edges: &[u32]) -> Res
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::refine::subdivide::{refine, RefineMesh, RefineOptions};
+    use crate::refine::subdivide::{edge_keys, refine, RefineMesh, RefineOptions, Refined};
     use crate::template::codec::decode;
     use crate::template::format::Relocation;
     use crate::template::library::{builtin, reference_body};
@@ -497,8 +445,9 @@ mod tests {
             let levels = 2;
             let opts = RefineOptions { levels, ..Default::default() };
             let coarse = RefineMesh::from_coarse(&m0, &edges).expect("coarse");
-            let (fine, _) = refine(coarse, &opts, |_: &mut [DVec3], _: &mut [bool]| {}).expect("refine");
-            let (panels, seams, lineage) = cut(&t, &fine.positions, &fine.triangles, levels).expect("cut");
+            let Refined { mesh: fine, lineage, .. } =
+                refine(coarse, &opts, |_: &mut [DVec3], _: &mut [bool]| {}).expect("refine");
+            let (panels, seams) = cut(&t, &fine.positions, &fine.triangles, &lineage).expect("cut");
             // every coarse edge's chain has 2^L + 1 vertices, and its split vertices lie
             // on the fine mesh's edges in order
             let fine_edges: std::collections::HashSet<(u32, u32)> = edge_keys(&fine.triangles).into_iter().collect();
@@ -531,7 +480,9 @@ mod tests {
     #[test]
     fn wrong_face_count_is_named() {
         let t = builtin().expect("library").remove(0);
-        let err = cut(&t, &[], &[[0, 1, 2]], 1).unwrap_err();
+        let mut one_level = Lineage::new();
+        one_level.push_level(Default::default());
+        let err = cut(&t, &[], &[[0, 1, 2]], &one_level).unwrap_err();
         assert!(matches!(err, PanelError::FaceCount { fine: 1, levels: 1, .. }), "{err}");
     }
 }

@@ -3,5 +3,6 @@
 
 pub mod clear;
 pub mod collision;
+pub mod lineage;
 pub mod subdivide;
 pub mod symmetry;

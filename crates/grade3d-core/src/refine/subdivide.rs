@@ -91,6 +91,7 @@
 use std::collections::BTreeMap;
 
 use crate::geom::topology::{check_edge_uses, triangle_edge_uses, MeshEdge, TopologyError};
+use crate::refine::lineage::Lineage;
 use crate::template::codec::CoarseMesh;
 use crate::template::profile::Profile;
 use glam::DVec3;
@@ -237,6 +238,19 @@ pub struct RefineMesh {
     pub edge_profiles: BTreeMap<(u32, u32), Profile>,
 }
 
+/// What [`refine`] made: the fine mesh `M_L`, how each level's fairing
+/// went, and the lineage of its numbering (which vertex each split put on
+/// each edge), which the pattern stage cuts panels and seams by.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Refined {
+    /// The fine mesh.
+    pub mesh: RefineMesh,
+    /// Per level.
+    pub levels: Vec<LevelReport>,
+    /// The split vertices of every level.
+    pub lineage: Lineage,
+}
+
 /// How one level's fairing went.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct LevelReport {
@@ -369,6 +383,14 @@ pub fn split(mesh: &RefineMesh) -> Result<RefineMesh, RefineError> {
 /// # Errors
 /// Any violated precondition (module docs), as a [`RefineError`]; [`RefineError::TooLarge`].
 pub fn split_with_boundary(mesh: &RefineMesh, butterfly: bool) -> Result<RefineMesh, RefineError> {
+    split_level(mesh, butterfly).map(|(m, _)| m)
+}
+
+/// The vertex one split put on each edge `(a, b)`, `a < b`: one level of a [`Lineage`].
+type Midpoints = BTreeMap<(u32, u32), u32>;
+
+/// [`split_with_boundary`], with the vertex it put on each edge.
+fn split_level(mesh: &RefineMesh, butterfly: bool) -> Result<(RefineMesh, Midpoints), RefineError> {
     let topo = Topology::of(mesh)?;
     let n_old = mesh.positions.len();
     let total = n_old + topo.edges.len();
@@ -408,7 +430,7 @@ pub fn split_with_boundary(mesh: &RefineMesh, butterfly: bool) -> Result<RefineM
         let (ab, bc, ca) = (mid(a, b), mid(b, c), mid(c, a));
         triangles.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
     }
-    Ok(RefineMesh { positions, triangles, fixed, edge_profiles })
+    Ok((RefineMesh { positions, triangles, fixed, edge_profiles }, new_id))
 }
 
 /// The modified Butterfly boundary mask (4-point rule) for the new vertex between `x`
@@ -445,15 +467,18 @@ pub fn refine<F: FnMut(&mut [DVec3], &mut [bool])>(
     coarse: RefineMesh,
     opts: &RefineOptions,
     mut after_sweep: F,
-) -> Result<(RefineMesh, Vec<LevelReport>), RefineError> {
+) -> Result<Refined, RefineError> {
     Topology::of(&coarse)?;
     let mut mesh = coarse;
-    let mut reports = Vec::with_capacity(opts.levels);
+    let mut levels = Vec::with_capacity(opts.levels);
+    let mut lineage = Lineage::new();
     for level in 1..=opts.levels {
-        mesh = split_with_boundary(&mesh, opts.butterfly_boundary)?;
-        reports.push(fair_level(&mut mesh, opts, level, &mut after_sweep)?);
+        let (fine, midpoints) = split_level(&mesh, opts.butterfly_boundary)?;
+        mesh = fine;
+        lineage.push_level(midpoints);
+        levels.push(fair_level(&mut mesh, opts, level, &mut after_sweep)?);
     }
-    Ok((mesh, reports))
+    Ok(Refined { mesh, levels, lineage })
 }
 
 /// Tangential relaxation (beyond the paper): `sweeps` Jacobi sweeps of
@@ -944,7 +969,7 @@ mod tests {
     #[test]
     fn each_level_multiplies_faces_by_four() {
         let opts = RefineOptions::default();
-        let (fine, reports) = refine(icosahedron(), &opts, no_hook).expect("refine");
+        let Refined { mesh: fine, levels: reports, .. } = refine(icosahedron(), &opts, no_hook).expect("refine");
         let faces: Vec<usize> = reports.iter().map(|r| r.faces).collect();
         assert_eq!(faces, [80, 320, 1280]);
         assert_eq!(fine.triangles.len(), 1280);
@@ -952,7 +977,7 @@ mod tests {
         assert_eq!(fine.positions.len(), 642);
         Topology::of(&fine).expect("oriented manifold");
         let (mesh, _, _) = skirt();
-        let (fine, reports) = refine(mesh.clone(), &opts, no_hook).expect("refine skirt");
+        let Refined { mesh: fine, levels: reports, .. } = refine(mesh.clone(), &opts, no_hook).expect("refine skirt");
         let faces: Vec<usize> = reports.iter().map(|r| r.faces).collect();
         let f0 = mesh.triangles.len();
         assert_eq!(faces, [4 * f0, 16 * f0, 64 * f0]);
@@ -1058,7 +1083,7 @@ mod tests {
             worst / diagonal
         );
         assert!(worst <= 1e-9 * diagonal);
-        let (fine, _) = refine(coarse.clone(), &opts, no_hook).expect("refine");
+        let Refined { mesh: fine, levels: _, .. } = refine(coarse.clone(), &opts, no_hook).expect("refine");
         assert_eq!(fine, mesh, "refine() is the same split/fair sequence");
     }
 
@@ -1068,7 +1093,7 @@ mod tests {
         let mut results = Vec::new();
         for solver in [FairingSolver::ConjugateGradient, FairingSolver::GaussSeidel] {
             let opts = RefineOptions { solver, ..RefineOptions::default() };
-            let (fine, reports) = refine(mesh.clone(), &opts, no_hook).expect("refine");
+            let Refined { mesh: fine, levels: reports, .. } = refine(mesh.clone(), &opts, no_hook).expect("refine");
             for r in &reports {
                 assert_eq!(r.converged, r.final_update_rel <= opts.tolerance);
             }
@@ -1117,7 +1142,8 @@ mod tests {
         let mut figures = Vec::new();
         for butterfly in [true, false] {
             let opts = RefineOptions { butterfly_boundary: butterfly, ..RefineOptions::default() };
-            let (fine, reports) = refine(coarse.clone(), &opts, no_hook).expect("refine tube");
+            let Refined { mesh: fine, levels: reports, .. } =
+                refine(coarse.clone(), &opts, no_hook).expect("refine tube");
             assert!(reports.iter().all(|r| r.converged));
             let mut sags = Vec::new();
             for (start, y) in [(0, 0.0), (AROUND, HEIGHT)] {
@@ -1174,17 +1200,18 @@ mod tests {
         let (mesh, _, _) = skirt();
         let opts = RefineOptions::default();
         let mut calls = 0;
-        let (fine, reports) = refine(mesh.clone(), &opts, |pos: &mut [DVec3], fixed: &mut [bool]| {
-            calls += 1;
-            for (p, &f) in pos.iter_mut().zip(fixed.iter()) {
-                if f {
-                    *p += DVec3::ONE;
+        let Refined { mesh: fine, levels: reports, .. } =
+            refine(mesh.clone(), &opts, |pos: &mut [DVec3], fixed: &mut [bool]| {
+                calls += 1;
+                for (p, &f) in pos.iter_mut().zip(fixed.iter()) {
+                    if f {
+                        *p += DVec3::ONE;
+                    }
                 }
-            }
-        })
-        .expect("refine");
+            })
+            .expect("refine");
         assert_eq!(calls, reports.iter().map(|r| r.fairing_sweeps).sum::<usize>());
-        let (plain, _) = refine(mesh.clone(), &opts, no_hook).expect("refine");
+        let Refined { mesh: plain, levels: _, .. } = refine(mesh.clone(), &opts, no_hook).expect("refine");
         assert_eq!(fine, plain);
     }
 
@@ -1198,23 +1225,24 @@ mod tests {
         let mid = mesh.positions.iter().map(|p| p.y).sum::<f64>() / mesh.positions.len() as f64;
         let mut first_held: Vec<Option<DVec3>> = Vec::new();
         let mut moved_after_hold = 0usize;
-        let (_, reports) = refine(mesh.clone(), &opts, |pos: &mut [DVec3], held: &mut [bool]| {
-            if first_held.len() != pos.len() {
-                first_held = vec![None; pos.len()];
-            }
-            for (i, p) in pos.iter().enumerate() {
-                match first_held[i] {
-                    Some(q) if q != *p => moved_after_hold += 1,
-                    Some(_) => {}
-                    None if !held[i] && p.y < mid => {
-                        held[i] = true;
-                        first_held[i] = Some(*p);
-                    }
-                    None => {}
+        let Refined { mesh: _, levels: reports, .. } =
+            refine(mesh.clone(), &opts, |pos: &mut [DVec3], held: &mut [bool]| {
+                if first_held.len() != pos.len() {
+                    first_held = vec![None; pos.len()];
                 }
-            }
-        })
-        .expect("refine");
+                for (i, p) in pos.iter().enumerate() {
+                    match first_held[i] {
+                        Some(q) if q != *p => moved_after_hold += 1,
+                        Some(_) => {}
+                        None if !held[i] && p.y < mid => {
+                            held[i] = true;
+                            first_held[i] = Some(*p);
+                        }
+                        None => {}
+                    }
+                }
+            })
+            .expect("refine");
         assert_eq!(moved_after_hold, 0, "a held vertex moved");
         assert!(reports.iter().all(|r| r.converged), "{reports:?}");
         assert!(reports.iter().all(|r| r.held > 0), "{reports:?}");
