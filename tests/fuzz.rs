@@ -10,13 +10,15 @@
 //! Parsers: GLB and glTF JSON (`io::gltf::read_mesh`), landmarks JSON
 //! (`io::landmarks::parse_landmarks`), size charts as CSV and JSON
 //! (`mannequin::size_chart::parse_text`), template documents
-//! (`template::format::Template::from_json`), and, through the router
-//! (`service::app`), job documents (`POST /v1/jobs`) and multipart scan
-//! uploads (`POST /v1/grade/scan`).
+//! (`template::format::Template::from_json`), job documents
+//! (`service::parse_job_spec` and `service::job_units`: the JSON, the
+//! chart or bodies in it) and multipart scan uploads
+//! (`service::read_scan_parts`), and both of those again through the
+//! router (`service::app`: `POST /v1/jobs`, `POST /v1/grade/scan`).
 //!
 //! `GRADE3D_FUZZ_ITERATIONS` (default 50 000: a few seconds in CI) sets the mutants per parser;
-//! the HTTP ones get a tenth (each is a request through the router and,
-//! for an accepted job, a durable write). A panicking input is written to
+//! the runs through the router get a tenth (each is a request through the
+//! router and, for an accepted job, a durable write). A panicking input is written to
 //! `target/fuzz-crashes/` and the test fails naming it: make it a
 //! regression test with the literal input.
 
@@ -248,6 +250,54 @@ fn template_documents_refuse_without_panicking() {
     check(&run, "template");
 }
 
+/// The seed of the multipart fuzzing: a scan upload with a small GLB.
+fn scan_upload() -> Vec<u8> {
+    let lm = read("fixtures/bodies/female-average-caucasian.landmarks.json");
+    let glb = grade3d::io::gltf::write_glb(&grade3d::geom::mesh::TriMesh::icosahedron(), None, &[], "fuzz").unwrap();
+    let mut body = Vec::new();
+    for (name, file, data) in
+        [("scan", Some("b.glb"), &glb[..]), ("landmarks", None, &lm[..]), ("template", None, b"trousers")]
+    {
+        body.extend_from_slice(b"--X\r\nContent-Disposition: form-data; name=\"");
+        body.extend_from_slice(name.as_bytes());
+        body.push(b'"');
+        if let Some(f) = file {
+            body.extend_from_slice(format!("; filename=\"{f}\"").as_bytes());
+        }
+        body.extend_from_slice(b"\r\n\r\n");
+        body.extend_from_slice(data);
+        body.extend_from_slice(b"\r\n");
+    }
+    body.extend_from_slice(b"--X--\r\n");
+    body
+}
+
+#[test]
+fn job_documents_refuse_without_panicking() {
+    use grade3d::mannequin::size_chart::SizeChartOptions;
+    use grade3d::service::{job_units, parse_job_spec};
+    let seeds = vec![read("fixtures/jobs/astm-misses-skirt-trousers.json")];
+    let run = fuzz("job-document", &seeds, iterations(), |b| {
+        parse_job_spec(b).and_then(|spec| job_units(&spec, SizeChartOptions::default(), 64)).is_ok()
+    });
+    check(&run, "job-document");
+}
+
+#[test]
+fn multipart_scan_uploads_refuse_without_panicking() {
+    use axum::body::Body;
+    use axum::http::Request;
+    let rt = tokio::runtime::Builder::new_current_thread().enable_all().build().unwrap();
+    let run = fuzz("multipart-parts", &[scan_upload()], iterations(), |b| {
+        let req = Request::post("/v1/grade/scan")
+            .header("content-type", "multipart/form-data; boundary=X")
+            .body(Body::from(b.to_vec()))
+            .unwrap();
+        rt.block_on(grade3d::service::read_scan_parts(req, 64 << 20)).is_ok()
+    });
+    check(&run, "multipart-parts");
+}
+
 /// Requests through the router of a service with no GPU context (a flow
 /// that gets that far answers 503 `not-ready`): every answer must be a
 /// problem document or a success, never a panic (500 from the catch-panic
@@ -284,22 +334,5 @@ fn job_documents_through_the_router_refuse_without_panicking() {
 
 #[test]
 fn multipart_scan_uploads_through_the_router_refuse_without_panicking() {
-    let lm = read("fixtures/bodies/female-average-caucasian.landmarks.json");
-    let glb = grade3d::io::gltf::write_glb(&grade3d::geom::mesh::TriMesh::icosahedron(), None, &[], "fuzz").unwrap();
-    let mut body = Vec::new();
-    for (name, file, data) in
-        [("scan", Some("b.glb"), &glb[..]), ("landmarks", None, &lm[..]), ("template", None, b"trousers")]
-    {
-        body.extend_from_slice(b"--X\r\nContent-Disposition: form-data; name=\"");
-        body.extend_from_slice(name.as_bytes());
-        body.push(b'"');
-        if let Some(f) = file {
-            body.extend_from_slice(format!("; filename=\"{f}\"").as_bytes());
-        }
-        body.extend_from_slice(b"\r\n\r\n");
-        body.extend_from_slice(data);
-        body.extend_from_slice(b"\r\n");
-    }
-    body.extend_from_slice(b"--X--\r\n");
-    http_fuzz("multipart", &[body], "multipart/form-data; boundary=X", "/v1/grade/scan");
+    http_fuzz("multipart", &[scan_upload()], "multipart/form-data; boundary=X", "/v1/grade/scan");
 }

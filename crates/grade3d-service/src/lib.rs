@@ -734,7 +734,16 @@ fn stamp_now(given: Option<Created>) -> Created {
 }
 
 fn parse_chart(s: &AppState, chart: &serde_json::Value, figure: Option<FigureType>) -> Result<SizeChart, Problem> {
-    let mut opts = s.chart_options();
+    parse_chart_with(s.chart_options(), chart, figure)
+}
+
+/// A request's size chart (JSON document or CSV text) read with `opts`
+/// (`figure`, when given, for ASTM waist columns).
+fn parse_chart_with(
+    mut opts: SizeChartOptions,
+    chart: &serde_json::Value,
+    figure: Option<FigureType>,
+) -> Result<SizeChart, Problem> {
     if let Some(f) = figure {
         opts.figure = f;
     }
@@ -868,11 +877,43 @@ async fn grade_scan(State(s): State<AppState>, headers: HeaderMap, req: Request)
     if !media_is(&headers, "multipart/form-data") {
         return Err(unsupported_media("multipart/form-data with parts scan, landmarks and template"));
     }
-    let max = s.0.cfg.max_body_bytes;
     let (parts, body) = req.into_parts();
     let bytes = body_bytes(&s, &headers, body).await?;
     let req = Request::from_parts(parts, axum::body::Body::from(bytes));
-    let mut mp = Multipart::from_request(req, &s)
+    let ScanParts { scan, landmarks, templates } = read_scan_parts(req, s.0.cfg.max_body_bytes).await?;
+    let templates = resolve_templates(&s, &templates, "template").await?;
+    let mut parts: Vec<&[u8]> = vec![b"scan", &scan, landmarks.as_bytes()];
+    parts.extend(templates.iter().map(|(_, json, _)| json.as_bytes()));
+    let id = content_id(&parts);
+    let ts: Vec<Template> = templates.into_iter().map(|(_, _, t)| t).collect();
+    let ttl = Duration::from_secs(s.0.cfg.scan_ttl_s);
+    run_flow(&s, id, "scan", Some(ttl), move |ctx| {
+        work::scan(ctx, &ts, &BodyInput { name: "scan", glb: &scan, landmarks: &landmarks })
+    })
+    .await
+}
+
+/// The parts of a scan upload.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScanParts {
+    /// The scan's bytes (GLB or glTF).
+    pub scan: Bytes,
+    /// The landmarks document.
+    pub landmarks: String,
+    /// The template names, in order.
+    pub templates: Vec<String>,
+}
+
+/// Reads a scan upload (`multipart/form-data` with the parts `scan`,
+/// `landmarks` and `template`) whose body is already within the limit
+/// `max` (named in a 413 should the multipart reader raise one): every
+/// refusal a 400 naming the part.
+///
+/// # Errors
+/// [`Problem`]: a malformed multipart body, an unknown or missing part,
+/// text that is not UTF-8.
+pub async fn read_scan_parts(req: Request, max: usize) -> Result<ScanParts, Problem> {
+    let mut mp = Multipart::from_request(req, &())
         .await
         .map_err(|e| Problem::bad_request("invalid-multipart", e.body_text()).field("body"))?;
     let (mut scan, mut landmarks, mut templates) = (None, None, Vec::new());
@@ -916,16 +957,7 @@ async fn grade_scan(State(s): State<AppState>, headers: HeaderMap, req: Request)
         .ok_or_else(|| Problem::bad_request("missing-part", "the `landmarks` part is missing").field("landmarks"))?;
     let landmarks = String::from_utf8(landmarks.to_vec())
         .map_err(|_| Problem::bad_request("not-utf8", "the landmarks are not UTF-8 JSON").field("landmarks"))?;
-    let templates = resolve_templates(&s, &templates, "template").await?;
-    let mut parts: Vec<&[u8]> = vec![b"scan", &scan, landmarks.as_bytes()];
-    parts.extend(templates.iter().map(|(_, json, _)| json.as_bytes()));
-    let id = content_id(&parts);
-    let ts: Vec<Template> = templates.into_iter().map(|(_, _, t)| t).collect();
-    let ttl = Duration::from_secs(s.0.cfg.scan_ttl_s);
-    run_flow(&s, id, "scan", Some(ttl), move |ctx| {
-        work::scan(ctx, &ts, &BodyInput { name: "scan", glb: &scan, landmarks: &landmarks })
-    })
-    .await
+    Ok(ScanParts { scan, landmarks, templates })
 }
 
 fn stored_result(s: &AppState, id: &str) -> Result<Arc<Stored>, Problem> {
@@ -1067,46 +1099,9 @@ async fn submit_job(
         return Err(unsupported_media("application/json"));
     }
     let bytes = body_bytes(&s, &headers, body).await?;
-    let spec: JobSpec = parse_json_body(&bytes)?;
-    parse_created(spec.created.as_deref())?;
+    let spec = parse_job_spec(&bytes)?;
     let templates = resolve_templates(&s, &spec.templates, "templates").await?;
-    let units = match (&spec.size_chart, spec.bodies.is_empty()) {
-        (Some(chart), true) => {
-            let chart = parse_chart(&s, chart, None)?;
-            if let Some(b) = &spec.base_size {
-                if !chart.rows.iter().any(|r| &r.size == b) {
-                    return Err(Problem::bad_request("unknown-base-size", format!("`{b}` is not a size of the chart"))
-                        .field("base_size"));
-                }
-            }
-            chart.rows.len()
-        }
-        (None, false) => {
-            if spec.bodies.len() > s.0.cfg.max_job_bodies {
-                return Err(Problem::bad_request(
-                    "too-many-bodies",
-                    format!("{} bodies; at most {} per job", spec.bodies.len(), s.0.cfg.max_job_bodies),
-                )
-                .field("bodies"));
-            }
-            for (i, b) in spec.bodies.iter().enumerate() {
-                valid_name(&b.name).map_err(|p| p.field(format!("bodies[{i}].name")))?;
-                if spec.bodies[..i].iter().any(|o| o.name == b.name) {
-                    return Err(Problem::bad_request("duplicate-body", format!("body `{}` twice", b.name))
-                        .field(format!("bodies[{i}].name")));
-                }
-                base64::engine::general_purpose::STANDARD.decode(&b.glb_base64).map_err(|e| {
-                    Problem::bad_request("invalid-base64", e.to_string()).field(format!("bodies[{i}].glb_base64"))
-                })?;
-            }
-            spec.bodies.len()
-        }
-        _ => {
-            return Err(
-                Problem::bad_request("job-input", "give exactly one of `size_chart` and `bodies`").field("size_chart")
-            )
-        }
-    };
+    let units = job_units(&spec, s.chart_options(), s.0.cfg.max_job_bodies)?;
     let canonical = work::json_bytes("job", &spec, false)?;
     let mut parts: Vec<&[u8]> = vec![b"job", &canonical];
     parts.extend(templates.iter().map(|(_, json, _)| json.as_bytes()));
@@ -1139,6 +1134,63 @@ async fn submit_job(
     s.0.metrics.jobs.with_label_values(&["queued"]).inc();
     let _ = s.0.job_tx.send(id);
     Ok((StatusCode::ACCEPTED, [(header::LOCATION, location)], Json(job_view(&s, &record))).into_response())
+}
+
+/// A job document parsed (JSON, unknown fields refused) with its `created`
+/// stamp checked; every refusal a 400 naming the field.
+///
+/// # Errors
+/// [`Problem`].
+pub fn parse_job_spec(bytes: &[u8]) -> Result<JobSpec, Problem> {
+    let spec: JobSpec = parse_json_body(bytes)?;
+    parse_created(spec.created.as_deref())?;
+    Ok(spec)
+}
+
+/// A parsed job's inputs checked (exactly one of a size chart, read with
+/// `chart`, and at most `max_bodies` bodies with unique valid names and
+/// base64 scans): its units of progress (sizes or bodies).
+///
+/// # Errors
+/// [`Problem`] naming the field.
+pub fn job_units(spec: &JobSpec, chart: SizeChartOptions, max_bodies: usize) -> Result<usize, Problem> {
+    Ok(match (&spec.size_chart, spec.bodies.is_empty()) {
+        (Some(doc), true) => {
+            let chart = parse_chart_with(chart, doc, None)?;
+            if let Some(b) = &spec.base_size {
+                if !chart.rows.iter().any(|r| &r.size == b) {
+                    return Err(Problem::bad_request("unknown-base-size", format!("`{b}` is not a size of the chart"))
+                        .field("base_size"));
+                }
+            }
+            chart.rows.len()
+        }
+        (None, false) => {
+            if spec.bodies.len() > max_bodies {
+                return Err(Problem::bad_request(
+                    "too-many-bodies",
+                    format!("{} bodies; at most {} per job", spec.bodies.len(), max_bodies),
+                )
+                .field("bodies"));
+            }
+            for (i, b) in spec.bodies.iter().enumerate() {
+                valid_name(&b.name).map_err(|p| p.field(format!("bodies[{i}].name")))?;
+                if spec.bodies[..i].iter().any(|o| o.name == b.name) {
+                    return Err(Problem::bad_request("duplicate-body", format!("body `{}` twice", b.name))
+                        .field(format!("bodies[{i}].name")));
+                }
+                base64::engine::general_purpose::STANDARD.decode(&b.glb_base64).map_err(|e| {
+                    Problem::bad_request("invalid-base64", e.to_string()).field(format!("bodies[{i}].glb_base64"))
+                })?;
+            }
+            spec.bodies.len()
+        }
+        _ => {
+            return Err(
+                Problem::bad_request("job-input", "give exactly one of `size_chart` and `bodies`").field("size_chart")
+            )
+        }
+    })
 }
 
 /// A reserved place among [`ServiceConfig::max_pending_jobs`]: given back
