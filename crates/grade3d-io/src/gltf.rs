@@ -42,6 +42,16 @@
 //! triangle primitive instance read is charged at least one triangle, so the work done is bounded
 //! by the input size and those limits even for files that instance a mesh many times.
 //!
+//! **The GLB container.** Read by our own splitter, not by the `gltf` crate's
+//! `Glb::from_slice` (issue #16, item 7, measured): the latter rejects an
+//! file whose chunk after the JSON one has an unknown type (glTF §4.4.3.1:
+//! readers ignore unknown chunk types); it does not bound the chunks by the
+//! header's declared length; and it subtracts the header size from the
+//! declared length unchecked (a declared length under 12 overflows). On well-formed files both agree
+//! (the test `container_split_agrees_with_the_gltf_crate_on_real_scans`).
+//! Written by the `gltf` crate's `Glb::to_vec`, once the total is known to
+//! fit the format's `u32` lengths.
+//!
 //! **Writing.** [`write_glb`] produces a self-contained GLB (glTF 2.0) with one scene, one node,
 //! one mesh and one triangle primitive: `POSITION` (`FLOAT` `VEC3`, with the `min`/`max` the
 //! spec requires), optionally `NORMAL` (normalised to unit length), any number of custom scalar
@@ -405,6 +415,9 @@ pub enum GltfError {
         /// The size it would have.
         bytes: u64,
     },
+    /// The container writer failed (not expected: it writes to memory).
+    #[error("writing the GLB container failed: {0}")]
+    GlbWrite(String),
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1011,27 +1024,20 @@ pub fn write_glb(
         "bufferViews": views,
         "buffers": [{ "byteLength": bin.len() }],
     });
-    let mut json_chunk = serde_json::to_vec(&doc)?;
-    pad(&mut json_chunk, b' ');
-    pad(&mut bin, 0);
-
-    let total = GLB_HEADER_LEN + 2 * GLB_CHUNK_HEADER_LEN + json_chunk.len() + bin.len();
-    let too_large = || GltfError::GlbTooLarge { bytes: total as u64 };
-    let total32 = u32::try_from(total).map_err(|_| too_large())?;
-    let json_len = u32::try_from(json_chunk.len()).map_err(|_| too_large())?;
-    let bin_len = u32::try_from(bin.len()).map_err(|_| too_large())?;
-
-    let mut out = Vec::with_capacity(total);
-    out.extend_from_slice(&GLB_MAGIC);
-    out.extend_from_slice(&GLB_VERSION.to_le_bytes());
-    out.extend_from_slice(&total32.to_le_bytes());
-    out.extend_from_slice(&json_len.to_le_bytes());
-    out.extend_from_slice(&CHUNK_JSON.to_le_bytes());
-    out.extend_from_slice(&json_chunk);
-    out.extend_from_slice(&bin_len.to_le_bytes());
-    out.extend_from_slice(&CHUNK_BIN.to_le_bytes());
-    out.extend_from_slice(&bin);
-    Ok(out)
+    let json_chunk = serde_json::to_vec(&doc)?;
+    // the container by the `gltf` crate's writer (it pads the JSON chunk with spaces and the BIN
+    // chunk with zeros), once the total is known to fit its `u32` lengths (it would wrap)
+    let total = GLB_HEADER_LEN
+        + 2 * GLB_CHUNK_HEADER_LEN
+        + json_chunk.len().next_multiple_of(GLB_ALIGN)
+        + bin.len().next_multiple_of(GLB_ALIGN);
+    let length = u32::try_from(total).map_err(|_| GltfError::GlbTooLarge { bytes: total as u64 })?;
+    let glb = gltf::binary::Glb {
+        header: gltf::binary::Header { magic: GLB_MAGIC, version: GLB_VERSION, length },
+        json: Cow::Owned(json_chunk),
+        bin: Some(Cow::Owned(bin)),
+    };
+    glb.to_vec().map_err(|e| GltfError::GlbWrite(e.to_string()))
 }
 
 /// Pads `bytes` with `fill` to a multiple of [`GLB_ALIGN`].
@@ -1271,6 +1277,51 @@ mod tests {
         out.extend_from_slice(&CHUNK_BIN.to_le_bytes());
         out.extend_from_slice(&bin);
         out
+    }
+
+    /// Fast vs reference: our container split and the `gltf` crate's agree on
+    /// the real scans and on a written GLB; ours also skips an unknown chunk
+    /// (glTF §4.4.3.1), which the crate's refuses.
+    #[test]
+    fn container_split_agrees_with_the_gltf_crate_on_real_scans() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/bodies");
+        let mut files: Vec<Vec<u8>> = std::fs::read_dir(&root)
+            .unwrap()
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.extension().is_some_and(|x| x == "glb"))
+            .map(|p| std::fs::read(p).unwrap())
+            .collect();
+        assert!(files.len() >= 8, "the fixture scans");
+        files.push(write_glb(&TriMesh::icosahedron(), None, &[], "test").unwrap());
+        for bytes in &files {
+            let (json, bin) = split_container(bytes).unwrap();
+            let glb = gltf::binary::Glb::from_slice(bytes).unwrap();
+            let theirs =
+                glb.json.iter().rposition(|&b| b != b' ' && b != 0).map_or(&glb.json[..0], |l| &glb.json[..=l]);
+            let ours = json.iter().rposition(|&b| b != b' ').map_or(&json[..0], |l| &json[..=l]);
+            assert_eq!(ours, theirs);
+            assert_eq!(bin, glb.bin.as_deref());
+        }
+        // a JSON chunk (buffer in a data URI) then a chunk of an unknown type, no BIN: ours skips
+        // it (glTF §4.4.3.1: readers ignore unknown chunk types), the crate's refuses the file
+        let mut json = embed(BASE, &tri_bin(TRI, [0, 1, 2]));
+        pad(&mut json, b' ');
+        let mut extra = Vec::new();
+        extra.extend_from_slice(b"glTF");
+        extra.extend_from_slice(&2u32.to_le_bytes());
+        extra.extend_from_slice(&((12 + 8 + json.len() + 8 + 4) as u32).to_le_bytes());
+        extra.extend_from_slice(&(json.len() as u32).to_le_bytes());
+        extra.extend_from_slice(&CHUNK_JSON.to_le_bytes());
+        extra.extend_from_slice(&json);
+        extra.extend_from_slice(&4u32.to_le_bytes());
+        extra.extend_from_slice(b"XTRA");
+        extra.extend_from_slice(&[1, 2, 3, 4]);
+        assert!(gltf::binary::Glb::from_slice(&extra).is_err());
+        assert_eq!(read(&extra).unwrap().face_count(), 1);
+        // bytes past the declared length are not chunks: ours reads the declared file only
+        let mut trailing = files.last().unwrap().clone();
+        trailing.extend_from_slice(&[0xFF; 16]);
+        assert_eq!(read(&trailing).unwrap().face_count(), 20);
     }
 
     // ----- read errors -----------------------------------------------------------------------

@@ -129,7 +129,8 @@ fn gltf_problem(e: &GltfError, field: &str, detail: String) -> Problem {
         | GltfError::BadNormal { .. } => StatusCode::BAD_REQUEST,
         GltfError::LengthMismatch { .. }
         | GltfError::InvalidAttributeName { .. }
-        | GltfError::NonFiniteOutput { .. } => return internal(&detail),
+        | GltfError::NonFiniteOutput { .. }
+        | GltfError::GlbWrite(_) => return internal(&detail),
     };
     Problem::new(status, "scan-invalid", "Invalid body scan", detail).field(field)
 }
