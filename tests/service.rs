@@ -843,14 +843,12 @@ fn scan_results_expire_and_slow_requests_time_out() {
     call("GET", &s.url(&format!("{href}/report.json")), &[], None).problem(404, None);
 }
 
-/// schemathesis (PyPI) against `openapi.yaml` with the server running:
-/// at least 1,000 generated cases, no 5xx, no response outside the schema
-/// (`tests/schemathesis.sh`). Skipped with a notice when schemathesis is
-/// missing; required under `GRADE3D_REQUIRE_PEERS=1` (as `.ci/run` sets).
-#[test]
-fn schemathesis_finds_no_server_error_and_no_schema_violation() {
+/// Whether Python module `module` (PyPI package `package`) can be imported:
+/// a test that needs it is skipped with a notice when it cannot, and fails
+/// under `GRADE3D_REQUIRE_PEERS=1` (as `.ci/run` sets).
+fn python_peer(module: &str, package: &str) -> bool {
     let have = Command::new("python3")
-        .args(["-c", "import schemathesis"])
+        .args(["-c", &format!("import {module}")])
         .stdout(Stdio::null())
         .stderr(Stdio::null())
         .status()
@@ -858,9 +856,20 @@ fn schemathesis_finds_no_server_error_and_no_schema_violation() {
     if !have {
         assert!(
             std::env::var("GRADE3D_REQUIRE_PEERS").is_err(),
-            "schemathesis is required under GRADE3D_REQUIRE_PEERS=1 (pip install schemathesis)"
+            "{package} is required under GRADE3D_REQUIRE_PEERS=1 (pip install {package})"
         );
-        eprintln!("NOTICE: schemathesis missing; the schema run was skipped");
+        eprintln!("NOTICE: {package} missing; the test that needs it was skipped");
+    }
+    have
+}
+
+/// schemathesis (PyPI) against `openapi.yaml` with the server running:
+/// at least 1,000 generated cases, no 5xx, no response outside the schema
+/// (`tests/schemathesis.sh`). Skipped with a notice when schemathesis is
+/// missing; required under `GRADE3D_REQUIRE_PEERS=1` (as `.ci/run` sets).
+#[test]
+fn schemathesis_finds_no_server_error_and_no_schema_violation() {
+    if !python_peer("schemathesis", "schemathesis") {
         return;
     }
     let out = Command::new("bash")
@@ -882,18 +891,7 @@ fn schemathesis_finds_no_server_error_and_no_schema_violation() {
 /// under `GRADE3D_REQUIRE_PEERS=1` (as `.ci/run` sets).
 #[test]
 fn a_generated_python_client_runs_the_three_flows() {
-    let have = Command::new("python3")
-        .args(["-c", "import openapi_python_client"])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status()
-        .is_ok_and(|s| s.success());
-    if !have {
-        assert!(
-            std::env::var("GRADE3D_REQUIRE_PEERS").is_err(),
-            "openapi-python-client is required under GRADE3D_REQUIRE_PEERS=1 (pip install openapi-python-client)"
-        );
-        eprintln!("NOTICE: openapi-python-client missing; the generated-client run was skipped");
+    if !python_peer("openapi_python_client", "openapi-python-client") {
         return;
     }
     let s = Server::start(&temp_dir("client"), &[]);

@@ -29,8 +29,20 @@ use crate::problem::{Problem, PROBLEM_JSON};
 use crate::report::Report;
 use crate::store::Entry;
 
-/// The artefact names a result or job can have, as a regular expression.
-pub const ARTEFACT_PATTERN: &str = r"^(report\.json|[A-Za-z0-9._-]+\.(pattern\.svg|pattern\.dxf|pattern\.accumark\.dxf|pattern\.json|garment\.glb|nest\.svg|nest\.dxf|nest\.accumark\.dxf|nest\.rul|rules\.csv))$";
+/// The path of an artefact download: the result's or job's id and the
+/// artefact's name (one of the enumerated forms).
+#[derive(Debug, Clone, PartialEq, Deserialize, utoipa::IntoParams)]
+#[into_params(parameter_in = Path)]
+pub struct ArtefactPath {
+    /// The result's or job's content address.
+    pub id: String,
+    /// File name: `{template}-{size}.pattern.svg|.pattern.dxf|.pattern.accumark.dxf|.pattern.json|.garment.glb`,
+    /// `{template}.nest.svg|.nest.dxf|.nest.accumark.dxf|.nest.rul|.rules.csv`, `report.json`.
+    #[param(
+        pattern = r"^(report\.json|[A-Za-z0-9._-]+\.(pattern\.svg|pattern\.dxf|pattern\.accumark\.dxf|pattern\.json|garment\.glb|nest\.svg|nest\.dxf|nest\.accumark\.dxf|nest\.rul|rules\.csv))$"
+    )]
+    pub artefact: String,
+}
 
 /// `GET /readyz`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]

@@ -1008,11 +1008,7 @@ fn artefact_response(headers: &HeaderMap, name: &str, media_type: &str, bytes: V
 /// One artefact of a cached result.
 #[utoipa::path(get, path = "/v1/results/{id}/{artefact}", tag = "grading", operation_id = "getResultArtefact",
     security((), ("apiKey" = [])),
-    params(
-        ("id" = String, Path, description = "The result's content address."),
-        ("artefact" = String, Path, pattern = r"^(report\.json|[A-Za-z0-9._-]+\.(pattern\.svg|pattern\.dxf|pattern\.accumark\.dxf|pattern\.json|garment\.glb|nest\.svg|nest\.dxf|nest\.accumark\.dxf|nest\.rul|rules\.csv))$",
-            description = "File name: `{template}-{size}.pattern.svg|.pattern.dxf|.pattern.accumark.dxf|.pattern.json|.garment.glb`, `{template}.nest.svg|.nest.dxf|.nest.accumark.dxf|.nest.rul|.rules.csv`, `report.json`."),
-    ),
+    params(api::ArtefactPath),
     responses(
         (status = 200, response = api::ArtefactBytes),
         (status = 401, response = api::Unauthorized),
@@ -1333,11 +1329,7 @@ async fn get_job(State(s): State<AppState>, headers: HeaderMap, Path(id): Path<S
 /// One artefact of a finished job.
 #[utoipa::path(get, path = "/v1/jobs/{id}/artefacts/{artefact}", tag = "jobs", operation_id = "getJobArtefact",
     security((), ("apiKey" = [])),
-    params(
-        ("id" = String, Path, description = "The job's content address."),
-        ("artefact" = String, Path, pattern = r"^(report\.json|[A-Za-z0-9._-]+\.(pattern\.svg|pattern\.dxf|pattern\.accumark\.dxf|pattern\.json|garment\.glb|nest\.svg|nest\.dxf|nest\.accumark\.dxf|nest\.rul|rules\.csv))$",
-            description = "File name, as for `getResultArtefact`."),
-    ),
+    params(api::ArtefactPath),
     responses(
         (status = 200, response = api::ArtefactBytes),
         (status = 401, response = api::Unauthorized),

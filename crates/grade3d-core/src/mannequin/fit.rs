@@ -313,32 +313,24 @@ fn quick_measure(
     Ok(out)
 }
 
-/// Solves the small dense system `a x = b` by Gaussian elimination with
-/// partial pivoting; `None` if singular.
-#[expect(clippy::needless_range_loop, reason = "elimination indexes rows and columns as in the formulas")]
-fn solve_dense(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
+/// Solves the small dense system `a x = b` (row-major `a`, `n × n`) by LU
+/// with partial pivoting (faer, issue #16: no hand-written elimination);
+/// `None` if `a` is not square of `b`'s size, singular (a pivot below
+/// 1e-300) or the solution is not finite.
+fn solve_dense(a: Vec<Vec<f64>>, b: Vec<f64>) -> Option<Vec<f64>> {
+    use faer::linalg::solvers::Solve;
     let n = b.len();
-    for c in 0..n {
-        let p = (c..n).max_by(|&i, &j| a[i][c].abs().total_cmp(&a[j][c].abs()))?;
-        if a[p][c].abs() < 1e-300 {
-            return None;
-        }
-        a.swap(c, p);
-        b.swap(c, p);
-        for r in c + 1..n {
-            let f = a[r][c] / a[c][c];
-            for k in c..n {
-                a[r][k] -= f * a[c][k];
-            }
-            b[r] -= f * b[c];
-        }
+    if a.len() != n || a.iter().any(|row| row.len() != n) {
+        return None;
     }
-    let mut x = vec![0.0; n];
-    for r in (0..n).rev() {
-        let s: f64 = (r + 1..n).map(|k| a[r][k] * x[k]).sum();
-        x[r] = (b[r] - s) / a[r][r];
+    let lu = faer::Mat::from_fn(n, n, |i, j| a[i][j]).partial_piv_lu();
+    let u = lu.U();
+    if (0..n).any(|i| u[(i, i)].is_nan() || u[(i, i)].abs() < 1e-300) {
+        return None;
     }
-    Some(x)
+    let x = lu.solve(faer::Mat::from_fn(n, 1, |i, _| b[i]));
+    let x: Vec<f64> = (0..n).map(|i| x[(i, 0)]).collect();
+    x.iter().all(|v| v.is_finite()).then_some(x)
 }
 
 /// Fits the embedded mannequin to one size-chart row.

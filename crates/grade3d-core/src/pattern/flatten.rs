@@ -1314,6 +1314,16 @@ fn kernel_centre(star: &[(DVec2, DVec2, f64)]) -> Option<(DVec2, f64)> {
 /// place (`a` row-major, overwritten by its Cholesky factor); a pivot below
 /// `ε` times its diagonal entry marks a dependent column, whose unknown is
 /// set to 0. Returns false if nothing could be solved.
+///
+/// Kept by hand (issue #16 item 7 asked for faer here; it stays): Anderson's
+/// Gram matrix is semi-definite by construction once two differences are
+/// parallel, and the right answer then is to drop that column (θ = 0 for
+/// it), which is what this does. faer's dense LLT refuses a semi-definite
+/// matrix outright, and its regularised variant replaces a small pivot by a
+/// chosen δ instead of dropping the column, which gives the extrapolation a
+/// large spurious coefficient; an LDLT or pivoted QR would change which
+/// column is dropped. The system is at most [`MAX_ANDERSON_DEPTH`] square,
+/// on the stack.
 fn cholesky_solve(a: &mut [f64], b: &mut [f64]) -> bool {
     let m = b.len();
     let mut dependent = [false; MAX_ANDERSON_DEPTH];
