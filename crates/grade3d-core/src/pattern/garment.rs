@@ -61,7 +61,7 @@ use super::darts::{dart_opening, insert_darts, AutoDartOptions, DartOrigin, Foun
 use super::fabric::{fabric_strain, FabricStrain};
 use super::flatten::{distortion, flatten_with_sewn_lengths, Distortion, FlattenError, FlattenOptions, Flattening};
 use super::grade::{mirror_difference, MirrorDifference};
-use super::panels::{cut, Panel, PanelError, SeamChain};
+use super::panels::{cut_plain, CutGarment, Panel, PanelError, SeamChain};
 use super::piece::PatternPiece;
 use crate::geom::plane::Plane;
 use crate::refine::lineage::Lineage;
@@ -381,17 +381,19 @@ fn pattern_darts(
     opts: &PatternOptions,
     plan: Option<&DartPlan>,
 ) -> Result<GarmentPattern, PatternError> {
+    // cut once: each pass below slits its darts into copies of these panels
+    let plain = cut_plain(t, positions, triangles, lineage)?;
     let mut tt = t.clone();
     if let Some(plan) = plan {
         tt.darts.retain(|d| !plan.left_out.iter().any(|(name, _)| *name == d.name));
-        let (mut g, _) = pattern_once(&tt, positions, triangles, lineage, size, opts, Search::Carry(&plan.found))?;
+        let (mut g, _) = pattern_once(&tt, positions, &plain, lineage, size, opts, Search::Carry(&plan.found))?;
         g.darts_left_out = plan.left_out.clone();
         g.dart_plan.left_out = plan.left_out.clone();
         return Ok(g);
     }
     let mut left_out = Vec::new();
     loop {
-        let (mut g, darts) = pattern_once(&tt, positions, triangles, lineage, size, opts, Search::None)?;
+        let (mut g, darts) = pattern_once(&tt, positions, &plain, lineage, size, opts, Search::None)?;
         // the worst dart that does not open (or opens inverted) goes, and the pattern is made again
         let worst = darts
             .iter()
@@ -413,7 +415,7 @@ fn pattern_darts(
                 // the declared darts are settled: darts where a piece still strains
                 let target = opts.auto_darts.target_strain_p95;
                 if opts.auto_darts.enabled && g.reports.iter().any(|r| r.distortion.strain_p95 > target) {
-                    g = pattern_once(&tt, positions, triangles, lineage, size, opts, Search::Find)?.0;
+                    g = pattern_once(&tt, positions, &plain, lineage, size, opts, Search::Find)?.0;
                 }
                 g.dart_plan.left_out = left_out.clone();
                 g.darts_left_out = left_out;
@@ -609,14 +611,15 @@ fn flatten_free(panel: &Panel, seams: &[SeamChain], opts: &FlattenOptions) -> Re
 fn pattern_once(
     t: &Template,
     positions: &[DVec3],
-    triangles: &[[u32; 3]],
+    plain: &CutGarment,
     lineage: &Lineage,
     size: &str,
     opts: &PatternOptions,
     search: Search<'_>,
 ) -> Result<(GarmentPattern, Vec<DartCheck>), PatternError> {
     let find_darts = matches!(search, Search::Find);
-    let (cut_panels, seams) = cut(t, positions, triangles, lineage)?;
+    let cut_panels = plain.darted(t, positions, lineage)?;
+    let seams = &plain.seams;
     let n_nodes = t.nodes.len() as u32;
     // darts where a piece strains, searched with the seams free when they are negotiated afterwards;
     // per panel at most `cap` of them, lowered when the negotiated flattening of the darted panel
@@ -646,7 +649,7 @@ fn pattern_once(
                 .into_par_iter()
                 .map(|i| {
                     let options = AutoDartOptions { max_darts: cap[i], ..opts.auto_darts };
-                    (i, search_darts(&panels[i], &seams, n_nodes, opts, &options))
+                    (i, search_darts(&panels[i], seams, n_nodes, opts, &options))
                 })
                 .collect();
             for (i, found) in fresh {
@@ -671,12 +674,12 @@ fn pattern_once(
                     });
                     let done = match mirrored {
                         Some(darts) => {
-                            flatten_free(&panel, &seams, &opts.flatten).map(|last| Searched { panel, darts, last })
+                            flatten_free(&panel, seams, &opts.flatten).map(|last| Searched { panel, darts, last })
                         }
                         None => {
                             // not a mirror image here (a scan): searched on its own
                             let options = AutoDartOptions { max_darts: cap[i], ..opts.auto_darts };
-                            search_darts(&panels[i], &seams, n_nodes, opts, &options)
+                            search_darts(&panels[i], seams, n_nodes, opts, &options)
                         }
                     };
                     (i, done)
@@ -698,12 +701,12 @@ fn pattern_once(
             } else {
                 panels
                     .par_iter()
-                    .map(|p| flatten_free(p, &seams, &opts.flatten))
+                    .map(|p| flatten_free(p, seams, &opts.flatten))
                     .collect::<Vec<_>>()
                     .into_iter()
                     .collect::<Result<Vec<_>, _>>()?
             };
-            negotiate(&panels, &free, &seams, n_nodes, opts.negotiation_power)
+            negotiate(&panels, &free, seams, n_nodes, opts.negotiation_power)
         } else {
             SewnRatios::new()
         };
@@ -715,14 +718,14 @@ fn pattern_once(
         let flats: Vec<Result<Flattening, PatternError>> = panels
             .par_iter()
             .map(|panel| {
-                let holds = seam_chains(panel, &seams, &sewn, true);
+                let holds = seam_chains(panel, seams, &sewn, true);
                 flatten_held(panel, &holds, &opts.flatten).map_err(flatten_error(panel))
             })
             .collect();
         for (i, ((panel, found_darts), flat)) in panels.iter().zip(found_darts).zip(flats).enumerate() {
             let flat = flat?;
             let d = distortion(&panel.positions, &panel.triangles, &flat.uv);
-            let p = assemble(t, panel, &seams, lineage, &flat.uv, size, &opts.piece)?;
+            let p = assemble(t, panel, seams, lineage, &flat.uv, size, &opts.piece)?;
             let sew_line_self_intersects = self_intersects(&p.piece.sew_line);
             let cut_line_self_intersects = self_intersects(&p.piece.cut_line);
             // found darts that leave a line of the piece unclean (issue #14, item 5: legs that cross
@@ -788,7 +791,7 @@ fn pattern_once(
                     })
                 })
                 .collect();
-            let (mut g, checks) = finish(t, positions, size, panels, &seams, pieces, placed, reports);
+            let (mut g, checks) = finish(t, positions, size, panels, seams, pieces, placed, reports);
             g.dart_plan.found = found;
             if let Search::Carry(_) = search {
                 // a carried dart opens by what this size's flattening gives it; nothing was searched

@@ -225,7 +225,8 @@ pub struct SeamChain {
 }
 
 /// Cuts the fine mesh (`positions`, `triangles`) the refinement made of the
-/// template `t`, with its `lineage`, into its panels and seams (module docs).
+/// template `t`, with its `lineage`, into its panels, the template's darts
+/// slit open, and seams (module docs): [`cut_plain`] then [`CutGarment::darted`].
 ///
 /// # Errors
 /// [`PanelError`] (module docs).
@@ -235,6 +236,92 @@ pub fn cut(
     triangles: &[[u32; 3]],
     lineage: &Lineage,
 ) -> Result<(Vec<Panel>, Vec<SeamChain>), PanelError> {
+    let plain = cut_plain(t, positions, triangles, lineage)?;
+    Ok((plain.darted(t, positions, lineage)?, plain.seams))
+}
+
+/// The garment cut along its seams, no dart slit yet: the first step of
+/// the pattern stage, made once per grade (issue #16, item 3); each pass
+/// that tries a set of declared darts slits them into copies of these
+/// panels ([`CutGarment::darted`]) instead of cutting the mesh again.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CutGarment {
+    /// The panels, in template order, without darts.
+    pub panels: Vec<Panel>,
+    /// The seams, in template order.
+    pub seams: Vec<SeamChain>,
+}
+
+impl CutGarment {
+    /// The panels with the darts `t` declares slit open, in `t`'s order (a
+    /// chain from the outline to the apex; `positions` the fine mesh's).
+    ///
+    /// # Errors
+    /// [`PanelError::BadDart`] for a dart whose edges do not meet end to end,
+    /// that is not inside its panel or cannot be slit;
+    /// [`PanelError::NotADisc`] if a slit panel is not a disc.
+    pub fn darted(&self, t: &Template, positions: &[DVec3], lineage: &Lineage) -> Result<Vec<Panel>, PanelError> {
+        let mut out = Vec::with_capacity(self.panels.len());
+        for plain in &self.panels {
+            let mut local_tris = plain.triangles.clone();
+            let mut global = plain.global.clone();
+            let mut darts = Vec::new();
+            for d in t.darts.iter().filter(|d| d.panel == plain.name) {
+                let chain = seam_chain(t, lineage, &d.name, &d.edges).map_err(|_| PanelError::BadDart {
+                    dart: d.name.clone(),
+                    reason: "its edges do not meet end to end".into(),
+                })?;
+                let Some(mut chain) = chain
+                    .iter()
+                    .map(|&g| global.binary_search(&g).ok().map(|i| i as u32))
+                    .collect::<Option<Vec<u32>>>()
+                else {
+                    return Err(PanelError::BadDart {
+                        dart: d.name.clone(),
+                        reason: format!("not inside panel '{}'", plain.name),
+                    });
+                };
+                // run it from the outline to the apex
+                let rim: std::collections::HashSet<u32> = boundary_loops(&local_tris).into_iter().flatten().collect();
+                if !rim.contains(&chain[0]) && chain.last().is_some_and(|v| rim.contains(v)) {
+                    chain.reverse();
+                }
+                let legs = slit(&mut local_tris, &mut global, &chain)
+                    .map_err(|reason| PanelError::BadDart { dart: d.name.clone(), reason })?;
+                darts.push(DartLegs { name: d.name.clone(), a: chain, b: legs });
+            }
+            if darts.is_empty() {
+                out.push(plain.clone());
+                continue;
+            }
+            let outline = disc_outline(&local_tris, &global)
+                .map_err(|loops| PanelError::NotADisc { panel: plain.name.clone(), loops })?;
+            out.push(Panel {
+                name: plain.name.clone(),
+                index: plain.index,
+                positions: global.iter().map(|&g| positions[g as usize]).collect(),
+                global,
+                unique: plain.unique,
+                darts,
+                triangles: local_tris,
+                outline,
+            });
+        }
+        Ok(out)
+    }
+}
+
+/// Cuts the fine mesh into its panels (no dart slit) and seams: the
+/// [`CutGarment`] step.
+///
+/// # Errors
+/// [`PanelError`] (module docs).
+pub fn cut_plain(
+    t: &Template,
+    positions: &[DVec3],
+    triangles: &[[u32; 3]],
+    lineage: &Lineage,
+) -> Result<CutGarment, PanelError> {
     let levels = lineage.levels();
     let coarse_faces = t.faces.len();
     let per = 1usize << (2 * levels);
@@ -250,31 +337,9 @@ pub fn cut(
         global.sort_unstable();
         global.dedup();
         let local = |g: u32| global.binary_search(&g).map(|i| i as u32).unwrap_or(u32::MAX);
-        let mut local_tris: Vec<[u32; 3]> = fine.iter().map(|t| t.map(local)).collect();
+        let local_tris: Vec<[u32; 3]> = fine.iter().map(|t| t.map(local)).collect();
         let unique = global.len();
-        let mut darts = Vec::new();
-        for d in t.darts.iter().filter(|d| d.panel == p.name) {
-            let chain = seam_chain(t, lineage, &d.name, &d.edges).map_err(|_| PanelError::BadDart {
-                dart: d.name.clone(),
-                reason: "its edges do not meet end to end".into(),
-            })?;
-            let Some(mut chain) =
-                chain.iter().map(|&g| global.binary_search(&g).ok().map(|i| i as u32)).collect::<Option<Vec<u32>>>()
-            else {
-                return Err(PanelError::BadDart {
-                    dart: d.name.clone(),
-                    reason: format!("not inside panel '{}'", p.name),
-                });
-            };
-            // run it from the outline to the apex
-            let rim: std::collections::HashSet<u32> = boundary_loops(&local_tris).into_iter().flatten().collect();
-            if !rim.contains(&chain[0]) && chain.last().is_some_and(|v| rim.contains(v)) {
-                chain.reverse();
-            }
-            let legs = slit(&mut local_tris, &mut global, &chain)
-                .map_err(|reason| PanelError::BadDart { dart: d.name.clone(), reason })?;
-            darts.push(DartLegs { name: d.name.clone(), a: chain, b: legs });
-        }
+        let darts = Vec::new();
         let outline = disc_outline(&local_tris, &global)
             .map_err(|loops| PanelError::NotADisc { panel: p.name.clone(), loops })?;
         let positions = global.iter().map(|&g| positions[g as usize]).collect();
@@ -318,7 +383,7 @@ pub fn cut(
         }
         seams.push(SeamChain { name: s.name.clone(), panel_a: a, panel_b: b, chain });
     }
-    Ok((panels, seams))
+    Ok(CutGarment { panels, seams })
 }
 
 /// Slits the triangles along `chain` (local ids, from a boundary vertex to an
