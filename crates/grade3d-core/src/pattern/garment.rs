@@ -608,6 +608,16 @@ fn flatten_free(panel: &Panel, seams: &[SeamChain], opts: &FlattenOptions) -> Re
 /// One pass of [`pattern`] with every declared dart (and, with `find_darts`,
 /// darts found where a piece strains); also each declared dart's signed
 /// opening (mm, negative when inverted) and whether its piece's sew line crosses itself.
+///
+/// Its steps, each a function with a typed result (issue #16, item 3): the
+/// declared darts slit into the garment cut once by the caller
+/// ([`CutGarment::darted`]) → the pass's found or carried darts
+/// ([`pass_darts`] → [`PassDarts`]) → the seams' sewn lengths
+/// ([`sewn_lengths`]) → every panel flattened with them, side by side →
+/// the pieces assembled ([`assemble`]) → their figures ([`piece_report`]).
+/// A found dart that leaves its piece folded or its lines unclean lowers
+/// its panel's cap, and the steps from the darts on run again (searches
+/// whose cap did not change are reused).
 fn pattern_once(
     t: &Template,
     positions: &[DVec3],
@@ -636,80 +646,11 @@ fn pattern_once(
         })
         .collect();
     loop {
-        let mut panels = cut_panels.clone();
-        let mut found_darts = vec![Vec::new(); panels.len()];
-        // with negotiated seams, the search's last flattening is the free one the negotiation needs
-        let mut free: Vec<Option<Trial>> = vec![None; panels.len()];
-        if find_darts {
-            // the panels' searches are independent: side by side on rayon's pool (issue #15),
-            // the first failure in panel order reported
-            let fresh: Vec<(usize, Result<Searched, PatternError>)> = (0..panels.len())
-                .filter(|&i| second_of[i].is_none() && searched[i].as_ref().is_none_or(|(c, _)| *c != cap[i]))
-                .collect::<Vec<_>>()
-                .into_par_iter()
-                .map(|i| {
-                    let options = AutoDartOptions { max_darts: cap[i], ..opts.auto_darts };
-                    (i, search_darts(&panels[i], seams, n_nodes, opts, &options))
-                })
-                .collect();
-            for (i, found) in fresh {
-                searched[i] = Some((cap[i], found?));
-            }
-            for (i, panel) in panels.iter_mut().enumerate() {
-                if second_of[i].is_some() {
-                    continue;
-                }
-                let Some((_, found)) = searched[i].clone() else { continue };
-                (*panel, found_darts[i], free[i]) = (found.panel, found.darts, Some(found.last));
-            }
-            let plane = mirror_plane(t, positions);
-            let seconds: Vec<(usize, Result<Searched, PatternError>)> = (0..panels.len())
-                .filter_map(|i| Some((i, second_of[i]?)))
-                .collect::<Vec<_>>()
-                .into_par_iter()
-                .map(|(i, first)| {
-                    let mut panel = panels[i].clone();
-                    let mirrored = plane.and_then(|plane| {
-                        mirror_darts(&panels[first], &found_darts[first], &mut panel, positions, plane, opts)
-                    });
-                    let done = match mirrored {
-                        Some(darts) => {
-                            flatten_free(&panel, seams, &opts.flatten).map(|last| Searched { panel, darts, last })
-                        }
-                        None => {
-                            // not a mirror image here (a scan): searched on its own
-                            let options = AutoDartOptions { max_darts: cap[i], ..opts.auto_darts };
-                            search_darts(&panels[i], seams, n_nodes, opts, &options)
-                        }
-                    };
-                    (i, done)
-                })
-                .collect();
-            for (i, done) in seconds {
-                let found = done?;
-                (panels[i], found_darts[i], free[i]) = (found.panel, found.darts, Some(found.last));
-            }
-        }
-        if let Search::Carry(planned) = search {
-            for (i, panel) in panels.iter_mut().enumerate() {
-                found_darts[i] = carry_darts(panel, planned)?;
-            }
-        }
-        let sewn = if opts.negotiate_seams {
-            let free = if find_darts {
-                free.into_iter().flatten().collect()
-            } else {
-                panels
-                    .par_iter()
-                    .map(|p| flatten_free(p, seams, &opts.flatten))
-                    .collect::<Vec<_>>()
-                    .into_iter()
-                    .collect::<Result<Vec<_>, _>>()?
-            };
-            negotiate(&panels, &free, seams, n_nodes, opts.negotiation_power)
-        } else {
-            SewnRatios::new()
-        };
+        // step: this pass's darts (declared, and found or carried)
+        let PassDarts { panels, found_darts, free } =
+            pass_darts(t, positions, &cut_panels, seams, opts, search, &cap, &mut searched, &second_of)?;
+        // step: the seams' sewn lengths, negotiated between their sides
+        let sewn = sewn_lengths(&panels, free, seams, n_nodes, opts, find_darts)?;
         let mut pieces = Vec::with_capacity(panels.len());
         let mut placed = Vec::with_capacity(panels.len());
         let mut reports = Vec::with_capacity(panels.len());
@@ -743,35 +684,16 @@ fn pattern_once(
                 }
                 refused = true;
             }
-            let area_3d_mm2 = panel
-                .triangles
-                .iter()
-                .map(|f| {
-                    let [a, b, c] = f.map(|v| panel.positions[v as usize]);
-                    0.5 * (b - a).cross(c - a).length()
-                })
-                .sum::<f64>()
-                * 1e6;
-            reports.push(PieceReport {
-                name: panel.name.clone(),
-                size: size.to_string(),
-                distortion: d,
-                fabric: fabric_strain(
-                    &panel.positions.iter().map(|q| *q * 1e3).collect::<Vec<_>>(),
-                    &panel.triangles,
-                    &p.uv_mm,
-                    DVec2::NEG_Y,
-                ),
-                iterations: flat.iterations,
-                converged: flat.converged,
-                fallback: flat.fallback,
-                area_3d_mm2,
-                hotspot: hotspot(t, panel, &p.uv_mm),
-                waist_deviation_mm: waist_deviation(t, panel, &p.piece),
-                sew_line_self_intersects,
-                cut_line_self_intersects,
+            reports.push(piece_report(
+                t,
+                panel,
+                &flat,
+                &p,
+                d,
+                size,
                 found_darts,
-            });
+                [sew_line_self_intersects, cut_line_self_intersects],
+            ));
             pieces.push(p.piece.clone());
             placed.push(p);
         }
@@ -805,6 +727,170 @@ fn pattern_once(
             }
             return Ok((g, checks));
         }
+    }
+}
+
+/// The darts of one pass of [`pattern_once`]: the panels with the declared
+/// darts slit (as cut) and the found or carried ones, the found darts per
+/// panel, and, where the search ran, each panel's free flattening.
+struct PassDarts {
+    panels: Vec<Panel>,
+    found_darts: Vec<Vec<FoundDart>>,
+    free: Vec<Option<Trial>>,
+}
+
+/// The dart step of a pass: with [`Search::Find`], darts searched where a
+/// piece strains (at most `cap[i]` per panel, searches reused from
+/// `searched` when their cap is unchanged; a mirror pair's second panel
+/// takes its first's darts mirrored, `second_of`); with [`Search::Carry`],
+/// the plan's darts slit along the same chains.
+#[expect(clippy::too_many_arguments, reason = "one step of a pass: its inputs and the pass's search state")]
+fn pass_darts(
+    t: &Template,
+    positions: &[DVec3],
+    cut_panels: &[Panel],
+    seams: &[SeamChain],
+    opts: &PatternOptions,
+    search: Search<'_>,
+    cap: &[usize],
+    searched: &mut [Option<(usize, Searched)>],
+    second_of: &[Option<usize>],
+) -> Result<PassDarts, PatternError> {
+    let find_darts = matches!(search, Search::Find);
+    let n_nodes = t.nodes.len() as u32;
+    let mut panels = cut_panels.to_vec();
+    let mut found_darts = vec![Vec::new(); panels.len()];
+    // with negotiated seams, the search's last flattening is the free one the negotiation needs
+    let mut free: Vec<Option<Trial>> = vec![None; panels.len()];
+    if find_darts {
+        // the panels' searches are independent: side by side on rayon's pool (issue #15),
+        // the first failure in panel order reported
+        let fresh: Vec<(usize, Result<Searched, PatternError>)> = (0..panels.len())
+            .filter(|&i| second_of[i].is_none() && searched[i].as_ref().is_none_or(|(c, _)| *c != cap[i]))
+            .collect::<Vec<_>>()
+            .into_par_iter()
+            .map(|i| {
+                let options = AutoDartOptions { max_darts: cap[i], ..opts.auto_darts };
+                (i, search_darts(&panels[i], seams, n_nodes, opts, &options))
+            })
+            .collect();
+        for (i, found) in fresh {
+            searched[i] = Some((cap[i], found?));
+        }
+        for (i, panel) in panels.iter_mut().enumerate() {
+            if second_of[i].is_some() {
+                continue;
+            }
+            let Some((_, found)) = searched[i].clone() else { continue };
+            (*panel, found_darts[i], free[i]) = (found.panel, found.darts, Some(found.last));
+        }
+        let plane = mirror_plane(t, positions);
+        let seconds: Vec<(usize, Result<Searched, PatternError>)> = (0..panels.len())
+            .filter_map(|i| Some((i, second_of[i]?)))
+            .collect::<Vec<_>>()
+            .into_par_iter()
+            .map(|(i, first)| {
+                let mut panel = panels[i].clone();
+                let mirrored = plane.and_then(|plane| {
+                    mirror_darts(&panels[first], &found_darts[first], &mut panel, positions, plane, opts)
+                });
+                let done = match mirrored {
+                    Some(darts) => {
+                        flatten_free(&panel, seams, &opts.flatten).map(|last| Searched { panel, darts, last })
+                    }
+                    None => {
+                        // not a mirror image here (a scan): searched on its own
+                        let options = AutoDartOptions { max_darts: cap[i], ..opts.auto_darts };
+                        search_darts(&panels[i], seams, n_nodes, opts, &options)
+                    }
+                };
+                (i, done)
+            })
+            .collect();
+        for (i, done) in seconds {
+            let found = done?;
+            (panels[i], found_darts[i], free[i]) = (found.panel, found.darts, Some(found.last));
+        }
+    }
+    if let Search::Carry(planned) = search {
+        for (i, panel) in panels.iter_mut().enumerate() {
+            found_darts[i] = carry_darts(panel, planned)?;
+        }
+    }
+    Ok(PassDarts { panels, found_darts, free })
+}
+
+/// The seam step of a pass: with [`PatternOptions::negotiate_seams`], each
+/// seam's sewn lengths negotiated between its sides from their free
+/// flattenings (`free`, where the dart search left them; else flattened
+/// here); else none (every seam held at its 3D length).
+fn sewn_lengths(
+    panels: &[Panel],
+    free: Vec<Option<Trial>>,
+    seams: &[SeamChain],
+    n_nodes: u32,
+    opts: &PatternOptions,
+    find_darts: bool,
+) -> Result<SewnRatios, PatternError> {
+    Ok(if opts.negotiate_seams {
+        let free = if find_darts {
+            free.into_iter().flatten().collect()
+        } else {
+            panels
+                .par_iter()
+                .map(|p| flatten_free(p, seams, &opts.flatten))
+                .collect::<Vec<_>>()
+                .into_iter()
+                .collect::<Result<Vec<_>, _>>()?
+        };
+        negotiate(panels, &free, seams, n_nodes, opts.negotiation_power)
+    } else {
+        SewnRatios::new()
+    })
+}
+
+/// The figures of one piece (module docs): distortion `d`, thread strain,
+/// ARAP's convergence, 3D area, strain hotspot, waist straightness, and
+/// whether its sew and cut lines cross themselves.
+#[expect(clippy::too_many_arguments, reason = "the piece's panel, flattening, placement and what the pass found")]
+fn piece_report(
+    t: &Template,
+    panel: &Panel,
+    flat: &Flattening,
+    p: &PlacedPanel,
+    d: Distortion,
+    size: &str,
+    found_darts: Vec<FoundDart>,
+    [sew_line_self_intersects, cut_line_self_intersects]: [bool; 2],
+) -> PieceReport {
+    let area_3d_mm2 = panel
+        .triangles
+        .iter()
+        .map(|f| {
+            let [a, b, c] = f.map(|v| panel.positions[v as usize]);
+            0.5 * (b - a).cross(c - a).length()
+        })
+        .sum::<f64>()
+        * 1e6;
+    PieceReport {
+        name: panel.name.clone(),
+        size: size.to_string(),
+        distortion: d,
+        fabric: fabric_strain(
+            &panel.positions.iter().map(|q| *q * 1e3).collect::<Vec<_>>(),
+            &panel.triangles,
+            &p.uv_mm,
+            DVec2::NEG_Y,
+        ),
+        iterations: flat.iterations,
+        converged: flat.converged,
+        fallback: flat.fallback,
+        area_3d_mm2,
+        hotspot: hotspot(t, panel, &p.uv_mm),
+        waist_deviation_mm: waist_deviation(t, panel, &p.piece),
+        sew_line_self_intersects,
+        cut_line_self_intersects,
+        found_darts,
     }
 }
 
