@@ -237,6 +237,39 @@ problem_responses! {
     Internal: "An internal error (nothing internal is disclosed).",
 }
 
+macro_rules! problem_sets {
+    ($($(#[$doc:meta])* $name:ident: [$($code:literal => $response:ident),+]),+ $(,)?) => {
+        $(
+            $(#[$doc])*
+            pub struct $name;
+            impl utoipa::IntoResponses for $name {
+                fn responses() -> BTreeMap<String, RefOr<Response>> {
+                    [$(($code, stringify!($response))),+]
+                        .into_iter()
+                        .map(|(code, name)| (code.to_owned(), RefOr::Ref(Ref::from_response_name(name))))
+                        .collect()
+                }
+            }
+        )+
+    };
+}
+
+problem_sets! {
+    /// The problems of a read by id or name: 401, 403, 404, 500.
+    ReadProblems: ["401" => Unauthorized, "403" => Forbidden, "404" => NotFound, "500" => Internal],
+    /// The problems of a template write: 400, 401, 403, 413, 422, 503, 500.
+    WriteProblems: [
+        "400" => BadRequest, "401" => Unauthorized, "403" => Forbidden, "413" => TooLarge,
+        "422" => Unprocessable, "503" => Unavailable, "500" => Internal
+    ],
+    /// The problems of a grading flow or a job submission: 400, 401, 403,
+    /// 413, 415, 422, 503, 500.
+    FlowProblems: [
+        "400" => BadRequest, "401" => Unauthorized, "403" => Forbidden, "413" => TooLarge,
+        "415" => UnsupportedMedia, "422" => Unprocessable, "503" => Unavailable, "500" => Internal
+    ],
+}
+
 /// Busy (the work queue is full), over the time limit, or not ready; retry
 /// after `Retry-After` seconds.
 pub struct Unavailable;

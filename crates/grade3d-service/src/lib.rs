@@ -559,10 +559,7 @@ async fn list_templates(State(s): State<AppState>, headers: HeaderMap) -> Result
         (status = 200, description = "The template document (its JSON Schema: `templates/schema/garment-template.schema.json`).",
             body = Object, headers(("x-template-version" = String, description = "The version answered."))),
         (status = 400, response = api::BadRequest),
-        (status = 401, response = api::Unauthorized),
-        (status = 403, response = api::Forbidden),
-        (status = 404, response = api::NotFound),
-        (status = 500, response = api::Internal),
+        api::ReadProblems,
     ))]
 async fn get_template(
     State(s): State<AppState>,
@@ -589,14 +586,8 @@ async fn get_template(
     responses(
         (status = 201, description = "Created, durably.", body = store::Entry,
             headers(("Location" = String, description = "/v1/templates/{name}"))),
-        (status = 400, response = api::BadRequest),
-        (status = 401, response = api::Unauthorized),
-        (status = 403, response = api::Forbidden),
         (status = 409, response = api::Conflict),
-        (status = 413, response = api::TooLarge),
-        (status = 422, response = api::Unprocessable),
-        (status = 503, response = api::Unavailable),
-        (status = 500, response = api::Internal),
+        api::WriteProblems,
     ))]
 async fn create_template(
     State(s): State<AppState>,
@@ -622,14 +613,8 @@ async fn create_template(
         description = "The new template document (`templates/schema/garment-template.schema.json`)."),
     responses(
         (status = 200, description = "The new live version, written durably.", body = store::Entry),
-        (status = 400, response = api::BadRequest),
-        (status = 401, response = api::Unauthorized),
-        (status = 403, response = api::Forbidden),
         (status = 404, response = api::NotFound),
-        (status = 413, response = api::TooLarge),
-        (status = 422, response = api::Unprocessable),
-        (status = 503, response = api::Unavailable),
-        (status = 500, response = api::Internal),
+        api::WriteProblems,
     ))]
 async fn replace_template(
     State(s): State<AppState>,
@@ -652,10 +637,7 @@ async fn replace_template(
     params(("name" = String, Path, description = "The template's name.")),
     responses(
         (status = 204, description = "Deleted."),
-        (status = 401, response = api::Unauthorized),
-        (status = 403, response = api::Forbidden),
-        (status = 404, response = api::NotFound),
-        (status = 500, response = api::Internal),
+        api::ReadProblems,
     ))]
 async fn delete_template(
     State(s): State<AppState>,
@@ -787,14 +769,7 @@ fn media_is(headers: &HeaderMap, what: &str) -> bool {
     )),
     responses(
         (status = 200, description = "The graded result (served from the cache when `cached`).", body = GradeResult),
-        (status = 400, response = api::BadRequest),
-        (status = 401, response = api::Unauthorized),
-        (status = 403, response = api::Forbidden),
-        (status = 413, response = api::TooLarge),
-        (status = 415, response = api::UnsupportedMedia),
-        (status = 422, response = api::Unprocessable),
-        (status = 503, response = api::Unavailable),
-        (status = 500, response = api::Internal),
+        api::FlowProblems,
     ))]
 async fn grade_size_chart(
     State(s): State<AppState>,
@@ -863,14 +838,7 @@ fn unsupported_media(what: &str) -> Problem {
     request_body(content = api::ScanUpload, content_type = "multipart/form-data"),
     responses(
         (status = 200, description = "The graded result (served from the cache when `cached`).", body = GradeResult),
-        (status = 400, response = api::BadRequest),
-        (status = 401, response = api::Unauthorized),
-        (status = 403, response = api::Forbidden),
-        (status = 413, response = api::TooLarge),
-        (status = 415, response = api::UnsupportedMedia),
-        (status = 422, response = api::Unprocessable),
-        (status = 503, response = api::Unavailable),
-        (status = 500, response = api::Internal),
+        api::FlowProblems,
     ))]
 async fn grade_scan(State(s): State<AppState>, headers: HeaderMap, req: Request) -> Result<Response, Problem> {
     check_key(&s, &headers, false)?;
@@ -970,10 +938,7 @@ fn stored_result(s: &AppState, id: &str) -> Result<Arc<Stored>, Problem> {
     params(("id" = String, Path, description = "The result's content address.")),
     responses(
         (status = 200, description = "The result.", body = GradeResult),
-        (status = 401, response = api::Unauthorized),
-        (status = 403, response = api::Forbidden),
-        (status = 404, response = api::NotFound),
-        (status = 500, response = api::Internal),
+        api::ReadProblems,
     ))]
 async fn get_result(
     State(s): State<AppState>,
@@ -1011,10 +976,7 @@ fn artefact_response(headers: &HeaderMap, name: &str, media_type: &str, bytes: V
     params(api::ArtefactPath),
     responses(
         (status = 200, response = api::ArtefactBytes),
-        (status = 401, response = api::Unauthorized),
-        (status = 403, response = api::Forbidden),
-        (status = 404, response = api::NotFound),
-        (status = 500, response = api::Internal),
+        api::ReadProblems,
     ))]
 async fn get_result_artefact(
     State(s): State<AppState>,
@@ -1076,14 +1038,7 @@ fn job_view(s: &AppState, r: &JobRecord) -> JobView {
     responses(
         (status = 202, description = "Accepted (or the same job, already accepted).", body = JobView,
             headers(("Location" = String, description = "/v1/jobs/{id}"))),
-        (status = 400, response = api::BadRequest),
-        (status = 401, response = api::Unauthorized),
-        (status = 403, response = api::Forbidden),
-        (status = 413, response = api::TooLarge),
-        (status = 415, response = api::UnsupportedMedia),
-        (status = 422, response = api::Unprocessable),
-        (status = 503, response = api::Unavailable),
-        (status = 500, response = api::Internal),
+        api::FlowProblems,
     ))]
 async fn submit_job(
     State(s): State<AppState>,
@@ -1315,10 +1270,7 @@ async fn job(s: &AppState, id: &str) -> Result<JobRecord, Problem> {
     params(("id" = String, Path, description = "The job's content address.")),
     responses(
         (status = 200, description = "The job.", body = JobView),
-        (status = 401, response = api::Unauthorized),
-        (status = 403, response = api::Forbidden),
-        (status = 404, response = api::NotFound),
-        (status = 500, response = api::Internal),
+        api::ReadProblems,
     ))]
 async fn get_job(State(s): State<AppState>, headers: HeaderMap, Path(id): Path<String>) -> Result<Response, Problem> {
     check_key(&s, &headers, false)?;
@@ -1332,10 +1284,7 @@ async fn get_job(State(s): State<AppState>, headers: HeaderMap, Path(id): Path<S
     params(api::ArtefactPath),
     responses(
         (status = 200, response = api::ArtefactBytes),
-        (status = 401, response = api::Unauthorized),
-        (status = 403, response = api::Forbidden),
-        (status = 404, response = api::NotFound),
-        (status = 500, response = api::Internal),
+        api::ReadProblems,
     ))]
 async fn get_job_artefact(
     State(s): State<AppState>,
