@@ -469,6 +469,12 @@ fn answers_validate_against_the_generated_schemas() {
     validate("Job", &r.json());
     let done = wait_job(&s, r.json()["href"].as_str().unwrap());
     validate("Job", &done);
+    // every built-in template document answers the contract's Template schema
+    for name in ["straight-skirt", "trousers", "fitted-bodice"] {
+        let r = call("GET", &s.url(&format!("/v1/templates/{name}")), &[], None);
+        assert_eq!(r.status, 200, "{name}");
+        validate("Template", &r.json());
+    }
 }
 
 #[test]

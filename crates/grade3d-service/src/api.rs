@@ -18,6 +18,7 @@
 use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
+use utoipa::openapi::schema::Schema;
 use utoipa::openapi::security::{HttpAuthScheme, HttpBuilder, SecurityScheme};
 use utoipa::openapi::{ContentBuilder, HeaderBuilder, Ref, RefOr, Response, ResponseBuilder};
 use utoipa::{Modify, OpenApi, ToResponse, ToSchema};
@@ -330,6 +331,83 @@ impl<'s> ToResponse<'s> for ArtefactBytes {
     }
 }
 
+/// The template document's schema, as its published JSON Schema
+/// (`templates/schema/garment-template.schema.json`, the one
+/// `Template::from_json` checks) says: its `$defs` hoisted into the
+/// components (`TemplateVec3`), `const` written as a one-value `enum`
+/// (the same constraint, in the keywords utoipa's model keeps).
+pub struct TemplateDocument;
+
+/// The template schema as OpenAPI components: `Template` and its `$defs`
+/// (`TemplateVec3`, …), with its `$ref`s rewritten to them.
+fn template_components() -> Result<Vec<(String, RefOr<Schema>)>, String> {
+    let mut doc: serde_json::Value =
+        serde_json::from_str(grade3d_core::template::format::SCHEMA_JSON).map_err(|e| e.to_string())?;
+    let obj = doc.as_object_mut().ok_or("the template schema is not an object")?;
+    obj.remove("$schema");
+    obj.remove("$id");
+    let defs = obj.remove("$defs").and_then(|d| d.as_object().cloned()).unwrap_or_default();
+    let component = |name: &str| format!("Template{}{}", name[..1].to_uppercase(), &name[1..]);
+    fn rewrite(v: &mut serde_json::Value, component: &dyn Fn(&str) -> String) {
+        match v {
+            serde_json::Value::Object(map) => {
+                if let Some(serde_json::Value::String(r)) = map.get_mut("$ref") {
+                    if let Some(name) = r.strip_prefix("#/$defs/") {
+                        *r = format!("#/components/schemas/{}", component(name));
+                    }
+                }
+                if let Some(c) = map.remove("const") {
+                    map.insert("enum".into(), serde_json::Value::Array(vec![c]));
+                }
+                // an `enum` without a `type`: the type its values share (utoipa's model wants one)
+                if let (Some(serde_json::Value::Array(values)), false) = (map.get("enum"), map.contains_key("type")) {
+                    let ty = if values.iter().all(|x| x.is_string()) {
+                        Some("string")
+                    } else if values.iter().all(|x| x.is_i64() || x.is_u64()) {
+                        Some("integer")
+                    } else {
+                        None
+                    };
+                    if let Some(ty) = ty {
+                        map.insert("type".into(), ty.into());
+                    }
+                }
+                map.values_mut().for_each(|x| rewrite(x, component));
+            }
+            serde_json::Value::Array(items) => items.iter_mut().for_each(|x| rewrite(x, component)),
+            _ => {}
+        }
+    }
+    let mut out = Vec::new();
+    for (name, mut def) in defs {
+        rewrite(&mut def, &component);
+        out.push((component(&name), serde_json::from_value(def).map_err(|e| e.to_string())?));
+    }
+    rewrite(&mut doc, &component);
+    out.push(("Template".to_owned(), serde_json::from_value(doc).map_err(|e| e.to_string())?));
+    Ok(out)
+}
+
+impl utoipa::PartialSchema for TemplateDocument {
+    fn schema() -> RefOr<Schema> {
+        // the schema is compiled in and checked by a test: the fallback cannot happen at run time
+        template_components()
+            .ok()
+            .and_then(|parts| parts.into_iter().find(|(n, _)| n == "Template"))
+            .map_or_else(|| utoipa::openapi::ObjectBuilder::new().into(), |(_, s)| s)
+    }
+}
+
+impl ToSchema for TemplateDocument {
+    fn name() -> std::borrow::Cow<'static, str> {
+        "Template".into()
+    }
+
+    fn schemas(schemas: &mut Vec<(String, RefOr<Schema>)>) {
+        schemas.extend(template_components().unwrap_or_default().into_iter().filter(|(n, _)| n != "Template"));
+    }
+}
+
 /// Adds the API-key security scheme.
 struct ApiKey;
 
@@ -428,5 +506,33 @@ mod tests {
             "a (`contact`) b `Collider::settle_fixed`, `x` `fabric`"
         );
         assert_eq!(plain_text("no link [`unclosed"), "no link [`unclosed");
+    }
+
+    /// The template schema in the contract loses nothing of the published
+    /// one: re-serialised, it is the published schema with `$defs` hoisted
+    /// and `const` as a one-value `enum`.
+    #[test]
+    fn the_template_schema_keeps_every_constraint() {
+        let parts = template_components().unwrap();
+        let names: Vec<&str> = parts.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names, ["TemplateVec3", "Template"]);
+        let mut want: serde_json::Value = serde_json::from_str(grade3d_core::template::format::SCHEMA_JSON).unwrap();
+        let o = want.as_object_mut().unwrap();
+        o.remove("$schema");
+        o.remove("$id");
+        let vec3 = o.remove("$defs").unwrap()["vec3"].clone();
+        let got = serde_json::to_value(&parts[1].1).unwrap();
+        let text = |v: &serde_json::Value| {
+            v.to_string()
+                .replace(
+                    r#""const":"grade3d/garment-template""#,
+                    r#""enum":["grade3d/garment-template"],"type":"string""#,
+                )
+                .replace(r#""enum":[1,-1]"#, r#""enum":[1,-1],"type":"integer""#)
+                .replace(r#""enum":["eq1_frame","eq2_offset"]"#, r#""enum":["eq1_frame","eq2_offset"],"type":"string""#)
+                .replace("#/$defs/vec3", "#/components/schemas/TemplateVec3")
+        };
+        assert_eq!(got, serde_json::from_str::<serde_json::Value>(&text(&want)).unwrap());
+        assert_eq!(serde_json::to_value(&parts[0].1).unwrap(), vec3);
     }
 }

@@ -557,7 +557,7 @@ async fn list_templates(State(s): State<AppState>, headers: HeaderMap) -> Result
     params(("name" = String, Path, description = "The template's name."), VersionQuery),
     responses(
         (status = 200, description = "The template document (its JSON Schema: `templates/schema/garment-template.schema.json`).",
-            body = Object, headers(("x-template-version" = String, description = "The version answered."))),
+            body = api::TemplateDocument, headers(("x-template-version" = String, description = "The version answered."))),
         (status = 400, response = api::BadRequest),
         api::ReadProblems,
     ))]
@@ -581,7 +581,7 @@ async fn get_template(
 /// Create a template (version 1).
 #[utoipa::path(post, path = "/v1/templates", tag = "templates", operation_id = "createTemplate",
     security(("apiKey" = [])),
-    request_body(content = Object, content_type = "application/json",
+    request_body(content = api::TemplateDocument, content_type = "application/json",
         description = "A garment feature template document (`templates/schema/garment-template.schema.json`): nodes by Eq. (1) of Wang, Wang & Yuen, edges with profiles, faces, panels, seams, darts, notches, grain lines, defaults."),
     responses(
         (status = 201, description = "Created, durably.", body = store::Entry,
@@ -609,7 +609,7 @@ async fn create_template(
 #[utoipa::path(put, path = "/v1/templates/{name}", tag = "templates", operation_id = "replaceTemplate",
     security(("apiKey" = [])),
     params(("name" = String, Path, description = "The template's name.")),
-    request_body(content = Object, content_type = "application/json",
+    request_body(content = api::TemplateDocument, content_type = "application/json",
         description = "The new template document (`templates/schema/garment-template.schema.json`)."),
     responses(
         (status = 200, description = "The new live version, written durably.", body = store::Entry),
