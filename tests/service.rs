@@ -571,6 +571,16 @@ fn scan_flow_multipart() {
     let href = j["href"].as_str().unwrap();
     let g = call("GET", &s.url(&format!("{href}/trousers-scan.garment.glb")), &[], None);
     assert_eq!((g.status, &g.body[..4]), (200, &b"glTF"[..]));
+    assert_eq!(g.header("content-type"), Some("model/gltf-binary"));
+    // a client that accepts only octets gets them as such, the same bytes (the contract lists both)
+    let octets = call(
+        "GET",
+        &s.url(&format!("{href}/trousers-scan.garment.glb")),
+        &[("Accept", "application/octet-stream")],
+        None,
+    );
+    assert_eq!(octets.header("content-type"), Some("application/octet-stream"));
+    assert!(octets.body == g.body);
     let svg = call("GET", &s.url(&format!("{href}/trousers-scan.pattern.svg")), &[], None);
     assert!(roxmltree::Document::parse(&svg.text()).is_ok());
     // failures
