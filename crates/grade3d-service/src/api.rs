@@ -149,8 +149,8 @@ pub struct ArtefactLink {
 pub struct GradeResult {
     /// Content address of the inputs.
     pub id: String,
-    /// `size-chart` or `scan`.
-    pub flow: String,
+    /// The flow: `size-chart` or `scan`.
+    pub flow: crate::report::Flow,
     /// The result's URL.
     pub href: String,
     /// Scan results: seconds they are kept.

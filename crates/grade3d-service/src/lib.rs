@@ -657,11 +657,11 @@ fn links(base: &str, artefacts: impl Iterator<Item = (String, String, usize)>) -
         .collect()
 }
 
-fn summary(id: &str, flow: &str, outcome: &Outcome, expires_s: Option<u64>) -> GradeResult {
+fn summary(id: &str, flow: report::Flow, outcome: &Outcome, expires_s: Option<u64>) -> GradeResult {
     let base = format!("/v1/results/{id}");
     GradeResult {
         id: id.to_owned(),
-        flow: flow.to_owned(),
+        flow,
         artefacts: links(
             &base,
             outcome.artefacts.iter().map(|a| (a.name.clone(), a.media_type.to_owned(), a.bytes.len())),
@@ -682,7 +682,7 @@ fn answer(stored: &Stored, cached: bool) -> Response {
 async fn run_flow(
     s: &AppState,
     id: String,
-    flow: &'static str,
+    flow: report::Flow,
     ttl: Option<Duration>,
     f: impl FnOnce(&WorkContext) -> Result<Outcome, work::WorkError> + Send + 'static,
 ) -> Result<Response, Problem> {
@@ -812,7 +812,7 @@ async fn grade_size_chart(
     let id = content_id(&parts);
     let base = req.base_size.clone();
     let ts: Vec<Template> = templates.into_iter().map(|(_, _, t)| t).collect();
-    run_flow(&s, id, "size-chart", None, move |ctx| {
+    run_flow(&s, id, report::Flow::SizeChart, None, move |ctx| {
         work::size_chart(ctx, &ts, &chart, base.as_deref(), Some(stamp_now(created)), &|_, _, _| {})
     })
     .await
@@ -855,7 +855,7 @@ async fn grade_scan(State(s): State<AppState>, headers: HeaderMap, req: Request)
     let id = content_id(&parts);
     let ts: Vec<Template> = templates.into_iter().map(|(_, _, t)| t).collect();
     let ttl = Duration::from_secs(s.0.cfg.scan_ttl_s);
-    run_flow(&s, id, "scan", Some(ttl), move |ctx| {
+    run_flow(&s, id, report::Flow::Scan, Some(ttl), move |ctx| {
         work::scan(ctx, &ts, &BodyInput { name: "scan", glb: &scan, landmarks: &landmarks })
     })
     .await

@@ -117,7 +117,7 @@ mod tests {
         Stored {
             summary: crate::api::GradeResult {
                 id: "a".into(),
-                flow: "scan".into(),
+                flow: crate::report::Flow::Scan,
                 href: "/v1/results/a".into(),
                 expires_in_s: None,
                 report: serde_json::Value::Null,
