@@ -164,15 +164,16 @@ impl utoipa::PartialSchema for DartLeftOut {
 impl ToSchema for DartLeftOut {}
 
 impl GarmentReport {
-    /// The report of `g`, graded from template `template`, with its fit.
-    pub fn new(template: &str, g: &Graded, fit: FitReport) -> Self {
+    /// The report of `g`, graded from template `template`, with its fit
+    /// (its pattern's figures moved in, not copied).
+    pub fn new(template: &str, g: Graded, fit: FitReport) -> Self {
         Self {
             template: template.to_owned(),
             fit,
             collision: g.collision,
-            pieces: g.pattern.reports.clone(),
-            seams: g.pattern.seams.clone(),
-            darts_left_out: g.pattern.darts_left_out.clone(),
+            pieces: g.pattern.reports,
+            seams: g.pattern.seams,
+            darts_left_out: g.pattern.darts_left_out,
         }
     }
 }
@@ -209,7 +210,7 @@ pub fn fit_report(
         collision_checked: obstacle.is_some(),
         distance_to_body_mm: quantiles(&ease_mm),
         vertices_inside_body: inside,
-        penetration: obstacle.map(|_| penetration(g, body, &ease_mm)),
+        penetration: obstacle.map(|_| penetration(g, body, &ease_mm, inside)),
         girth_ease: girth_ease(body, &cut, t, &g.expected_ease_mm, &g.girth_lines, &opts.ease),
     };
     Ok(FitStep { ease_mm, report })
@@ -219,9 +220,8 @@ pub fn fit_report(
 /// deepest one with the feature point nearest to it, and the garment/body
 /// triangle pairs that intersect (the exact test of the pipeline's last
 /// surface-clearing round). `ease_mm` is each vertex's signed distance to
-/// the body, mm (negative inside).
-fn penetration(g: &Graded, body: &FeatureBody, ease_mm: &[f64]) -> PenetrationReport {
-    let inside = ease_mm.iter().filter(|&&e| e < 0.0).count();
+/// the body, mm (negative inside), `inside` how many are negative.
+fn penetration(g: &Graded, body: &FeatureBody, ease_mm: &[f64], inside: usize) -> PenetrationReport {
     let deepest = ease_mm.iter().enumerate().filter(|(_, &e)| e < 0.0).min_by(|a, b| a.1.total_cmp(b.1));
     let nearest = deepest.and_then(|(i, _)| {
         let p = g.mesh.positions[i];

@@ -160,6 +160,7 @@ impl From<WorkError> for Problem {
             | WorkError::Render { .. }
             | WorkError::Export { .. }
             | WorkError::GarmentGlb { .. }
+            | WorkError::FitReport(_)
             | WorkError::Serialise { .. } => internal(&detail),
             WorkError::Fit { source, .. } => match source {
                 FitError::Mannequin { .. } | FitError::Landmark { .. } => internal(&detail),

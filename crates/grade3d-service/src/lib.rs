@@ -657,19 +657,25 @@ fn links(base: &str, artefacts: impl Iterator<Item = (String, String, usize)>) -
         .collect()
 }
 
-fn summary(id: &str, flow: report::Flow, outcome: &Outcome, expires_s: Option<u64>) -> GradeResult {
+/// The answer of a flow whose outcome's report and timings are given
+/// (moved, not copied) with its `artefacts`.
+fn summary(
+    id: &str,
+    flow: report::Flow,
+    report: serde_json::Value,
+    timings_ms: std::collections::BTreeMap<String, f64>,
+    artefacts: &[Artefact],
+    expires_s: Option<u64>,
+) -> GradeResult {
     let base = format!("/v1/results/{id}");
     GradeResult {
         id: id.to_owned(),
         flow,
-        artefacts: links(
-            &base,
-            outcome.artefacts.iter().map(|a| (a.name.clone(), a.media_type.to_owned(), a.bytes.len())),
-        ),
+        artefacts: links(&base, artefacts.iter().map(|a| (a.name.clone(), a.media_type.to_owned(), a.bytes.len()))),
         href: base,
         expires_in_s: expires_s,
-        report: outcome.report.clone(),
-        timings_ms: outcome.timings.clone(),
+        report,
+        timings_ms,
         cached: false,
     }
 }
@@ -696,8 +702,9 @@ async fn run_flow(
     let outcome = s.0.pool.run(limit, move || f(&ctx)).await??;
     s.0.metrics.observe_stages(&outcome.timings);
     let expires = ttl.map(|t| Instant::now() + t);
-    let summary = summary(&id, flow, &outcome, ttl.map(|t| t.as_secs()));
-    let stored = s.0.results.put(id, Stored { summary, artefacts: outcome.artefacts, expires });
+    let Outcome { report, artefacts, timings } = outcome;
+    let summary = summary(&id, flow, report, timings, &artefacts, ttl.map(|t| t.as_secs()));
+    let stored = s.0.results.put(id, Stored { summary, artefacts, expires });
     Ok(answer(&stored, false))
 }
 
@@ -741,9 +748,16 @@ fn parse_chart_with(
     .map_err(|e| errors::chart_problem(&e))
 }
 
+/// Whether the request's `Content-Type` is `what` (parameters ignored).
 fn media_is(headers: &HeaderMap, what: &str) -> bool {
+    header_media_is(headers, header::CONTENT_TYPE, what)
+}
+
+/// Whether header `name` holds the one media type `what` (parameters
+/// ignored; a list of several types is not `what`).
+fn header_media_is(headers: &HeaderMap, name: header::HeaderName, what: &str) -> bool {
     headers
-        .get(header::CONTENT_TYPE)
+        .get(name)
         .and_then(|v| v.to_str().ok())
         .is_some_and(|v| v.split(';').next().is_some_and(|m| m.trim().eq_ignore_ascii_case(what)))
 }
@@ -955,9 +969,7 @@ async fn get_result(
 /// (module docs of [`api`]).
 fn artefact_response(headers: &HeaderMap, name: &str, media_type: &str, bytes: Vec<u8>) -> Response {
     let disposition = format!("attachment; filename=\"{name}\"");
-    let octets = headers.get(header::ACCEPT).and_then(|v| v.to_str().ok()).is_some_and(|v| {
-        v.split(';').next().is_some_and(|m| m.trim().eq_ignore_ascii_case("application/octet-stream"))
-    });
+    let octets = header_media_is(headers, header::ACCEPT, "application/octet-stream");
     let media_type = if octets { "application/octet-stream" } else { media_type };
     let mut resp = bytes.into_response();
     let h = resp.headers_mut();
@@ -981,7 +993,7 @@ fn artefact_response(headers: &HeaderMap, name: &str, media_type: &str, bytes: V
 async fn get_result_artefact(
     State(s): State<AppState>,
     headers: HeaderMap,
-    Path((id, name)): Path<(String, String)>,
+    Path(api::ArtefactPath { id, artefact: name }): Path<api::ArtefactPath>,
 ) -> Result<Response, Problem> {
     check_key(&s, &headers, false)?;
     let stored = stored_result(&s, &id)?;
@@ -1289,7 +1301,7 @@ async fn get_job(State(s): State<AppState>, headers: HeaderMap, Path(id): Path<S
 async fn get_job_artefact(
     State(s): State<AppState>,
     headers: HeaderMap,
-    Path((id, name)): Path<(String, String)>,
+    Path(api::ArtefactPath { id, artefact: name }): Path<api::ArtefactPath>,
 ) -> Result<Response, Problem> {
     check_key(&s, &headers, false)?;
     let r = job(&s, &id).await?;

@@ -132,6 +132,9 @@ pub enum WorkError {
     /// Writing the garment GLB failed.
     #[error("garment GLB: {0}")]
     GarmentGlb(GltfError),
+    /// The fit report of a garment could not be made (internal).
+    #[error("fit report: {0}")]
+    FitReport(#[from] FitReportError),
     /// A JSON artefact did not serialise (internal; issue #16: it was
     /// written as an empty artefact).
     #[error("{what} did not serialise: {source}")]
@@ -498,10 +501,7 @@ fn garment_glb(
 ) -> Result<(Vec<u8>, FitReport), WorkError> {
     let tris: Vec<[VertexId; 3]> = g.mesh.triangles.iter().map(|t| t.map(VertexId)).collect();
     let mesh = TriMesh::new(g.mesh.positions.clone(), tris).map_err(|e| WorkError::GarmentGlb(GltfError::Mesh(e)))?;
-    let FitStep { ease_mm, report } =
-        fit_report(t, g, body, obstacle, &FitReportOptions::default()).map_err(|e| match e {
-            FitReportError::CutMesh(e) => WorkError::GarmentGlb(GltfError::Mesh(e)),
-        })?;
+    let FitStep { ease_mm, report } = fit_report(t, g, body, obstacle, &FitReportOptions::default())?;
     let normals = mesh.vertex_normals();
     let ease_f32: Vec<f32> = ease_mm.iter().map(|&e| e as f32).collect();
     let glb = write_glb(&mesh, Some(&normals), &[GlbAttribute { name: "_EASE_MM", values: &ease_f32 }], "grade3d")
@@ -568,10 +568,9 @@ fn collect(
     graded
         .into_iter()
         .zip(per_template.iter_mut())
-        .map(|((name, g, fit), sizes)| {
-            let report = GarmentReport::new(&name, &g, fit);
-            sizes.push((size.to_owned(), g.pattern.pieces));
-            report
+        .map(|((name, mut g, fit), sizes)| {
+            sizes.push((size.to_owned(), std::mem::take(&mut g.pattern.pieces)));
+            GarmentReport::new(&name, g, fit)
         })
         .collect()
 }

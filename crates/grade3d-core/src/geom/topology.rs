@@ -181,21 +181,29 @@ pub fn check_vertex_fans<E: fmt::Display>(
             fans.union(next(c1), c2);
         }
     }
-    let mut roots: Vec<Vec<u32>> = vec![Vec::new(); vertices];
+    // each vertex's first fan, one pass over the corners; the fan count only for the offender
+    let mut first = vec![u32::MAX; vertices];
+    let mut offender: Option<u32> = None;
     for (f, t) in triangles.iter().enumerate() {
         for (k, &v) in t.iter().enumerate() {
             let root = fans.find(3 * f as u32 + k as u32);
-            if let Some(r) = roots.get_mut(v as usize) {
-                r.push(root);
+            match first.get_mut(v as usize) {
+                Some(r) if *r == u32::MAX => *r = root,
+                Some(r) if *r != root => offender = Some(offender.map_or(v, |o| o.min(v))),
+                _ => {}
             }
         }
     }
-    for (v, r) in roots.iter_mut().enumerate() {
-        r.sort_unstable();
-        r.dedup();
-        if r.len() > 1 {
-            return Err(TopologyError::NonManifoldVertex { vertex: VertexId(v as u32), fans: r.len() });
+    if let Some(v) = offender {
+        let mut roots: Vec<u32> = Vec::new();
+        for (f, t) in triangles.iter().enumerate() {
+            for (k, _) in t.iter().enumerate().filter(|(_, &u)| u == v) {
+                roots.push(fans.find(3 * f as u32 + k as u32));
+            }
         }
+        roots.sort_unstable();
+        roots.dedup();
+        return Err(TopologyError::NonManifoldVertex { vertex: VertexId(v), fans: roots.len() });
     }
     Ok(())
 }

@@ -140,11 +140,11 @@ use faer::sparse::{Argsort, FaerError, Pair, SparseColMat, SymbolicSparseColMat}
 use faer::traits::ComplexField;
 use faer::{c64, Conj, MatMut, Par, Side};
 use glam::{DVec2, DVec3};
+use serde::{Deserialize, Serialize};
 
 use crate::geom::topology::{
     check_edge_uses, check_vertex_fans, triangle_edge_uses, MeshEdge, TopologyError, UnionFind,
 };
-use serde::{Deserialize, Serialize};
 
 /// Knobs of [`flatten`].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
