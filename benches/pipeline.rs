@@ -29,7 +29,7 @@ fn benches(c: &mut Criterion) {
     eprintln!("stage timings of one grade: {:?}", graded.timings);
     if let Some(ob) = &obstacle {
         // issue #13: every vertex by the exact test, and the triangle pairs crossing the body
-        let pen = penetration_stats(&ob.tree, &graded.mesh.positions);
+        let pen = penetration_stats(&ob.tree, &graded.mesh.positions.raw);
         let s = graded.collision.surface;
         eprintln!(
             "outside the body: {} of {} vertices inside, deepest {:.3} mm; {} garment triangles, {} crossing \

@@ -101,7 +101,14 @@ fn main() {
                     };
                     let bt: Vec<[u32; 3]> = body.mesh.triangles().iter().map(|t| t.map(|v| v.0)).collect();
                     std::fs::write(format!("{dir}/body.obj"), obj(body.mesh.positions(), &bt)).unwrap();
-                    std::fs::write(format!("{dir}/garment.obj"), obj(&g.mesh.positions, &g.mesh.triangles)).unwrap();
+                    std::fs::write(
+                        format!("{dir}/garment.obj"),
+                        obj(
+                            &g.mesh.positions.raw,
+                            &g.mesh.triangles.iter().map(|t| t.map(|v| v.0)).collect::<Vec<_>>(),
+                        ),
+                    )
+                    .unwrap();
                     let fixed: Vec<String> = g.mesh.fixed.iter().map(|f| u8::from(*f).to_string()).collect();
                     std::fs::write(format!("{dir}/fixed.txt"), fixed.join("\n")).unwrap();
                     let pl: Vec<String> =
@@ -121,7 +128,7 @@ fn main() {
                         .map(|p| {
                             let f = obstacle.tree.face_corners(p.body);
                             let d = f.iter().map(|&q| c.distance(q)).fold(f64::INFINITY, f64::min);
-                            let gt = g.mesh.triangles[p.garment as usize].map(|v| g.mesh.positions[v as usize]);
+                            let gt = g.mesh.triangles[p.garment].map(|v| g.mesh.positions[v]);
                             let dg = gt.iter().map(|&q| c.distance(q)).fold(f64::INFINITY, f64::min);
                             let e = (0..3).map(|k| gt[k].distance(gt[(k + 1) % 3])).fold(0.0, f64::max);
                             format!("g{} at {:.3?}: {:.1} mm from the contact, garment triangle {:.1} mm (longest edge {:.1} mm)", p.garment, f[0], d * 1e3, dg * 1e3, e * 1e3)
@@ -144,7 +151,7 @@ fn main() {
                 let gw: Vec<f64> = pairs
                     .iter()
                     .map(|p| {
-                        let t = g.mesh.triangles[p.garment as usize].map(|v| g.mesh.positions[v as usize]);
+                        let t = g.mesh.triangles[p.garment].map(|v| g.mesh.positions[v]);
                         obstacle.tree.winding_number_exact((t[0] + t[1] + t[2]) / 3.0)
                     })
                     .collect();
@@ -199,17 +206,17 @@ fn main() {
                         .map(|(id, q)| format!("{id} {:.0} mm", q.position.distance(m) * 1e3))
                         .unwrap();
                     let nearest_self = selfx.iter().map(|q| q.distance(m)).fold(f64::INFINITY, f64::min);
-                    let gt = g.mesh.triangles[p.garment as usize];
+                    let gt = g.mesh.triangles[p.garment];
                     for v in gt {
-                        let q = g.mesh.positions[v as usize];
+                        let q = g.mesh.positions[v];
                         eprintln!(
                             "      v{v} {:.3?} depth {:.1} mm fixed {}",
                             q.to_array(),
                             obstacle.tree.signed_depth(q) * 1e3,
-                            g.mesh.fixed[v as usize]
+                            g.mesh.fixed[v]
                         );
                     }
-                    let fixed = gt.iter().filter(|v| g.mesh.fixed[**v as usize]).count();
+                    let fixed = gt.iter().filter(|v| g.mesh.fixed[**v]).count();
                     eprintln!(
                         "    pair g{} b{}: at {:.3?} near {near}; body self-crossing {:.0} mm away; {fixed} fixed corners",
                         p.garment,

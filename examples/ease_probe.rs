@@ -70,7 +70,7 @@ fn main() {
                         continue;
                     }
                 };
-                let pen = penetration_stats(&obstacle.tree, &g.mesh.positions);
+                let pen = penetration_stats(&obstacle.tree, &g.mesh.positions.raw);
                 let worst = g
                     .pattern
                     .reports

@@ -88,7 +88,7 @@ fn main() {
                     .enumerate()
                     .filter(|(_, n)| n.point.as_str() == name)
                     .map(|(i, _)| {
-                        let q = g.cut_positions[i] * 1e3;
+                        let q = g.cut_positions[grade3d::refine::lineage::node_vertex(i as u32)] * 1e3;
                         format!("[{:.1},{:.1},{:.1}]", q.x, q.y, q.z)
                     })
                     .collect();

@@ -10,7 +10,7 @@ use grade3d::body::derive::{derive_features, DeriveOptions};
 use grade3d::body::vocab::{CurveId, PointId};
 use grade3d::collide::cache::Obstacle;
 use grade3d::collide::render::{GpuContext, RenderOptions};
-use grade3d::geom::mesh::{TriMesh, VertexId};
+use grade3d::geom::mesh::TriMesh;
 use grade3d::geom::plane::Plane;
 use grade3d::geom::slice::slice;
 use grade3d::geom::winding::{WindingOptions, WindingTree};
@@ -31,8 +31,7 @@ fn main() {
     let obstacle = Obstacle { maps, tree: WindingTree::new(&body.mesh, &WindingOptions::default()) };
     let t = builtin().unwrap().into_iter().find(|t| t.name == "trousers").unwrap();
     let g = grade(&t, &body, Some(&obstacle), &name, &GradeOptions::default()).unwrap();
-    let tris: Vec<[VertexId; 3]> = g.mesh.triangles.iter().map(|t| t.map(VertexId)).collect();
-    let garment = TriMesh::new(g.cut_positions.clone(), tris).unwrap();
+    let garment = g.cut_mesh().unwrap();
     let x = body.curves[&CurveId::ThighLeft].polyline.length_centroid().x;
     let plane = Plane { normal: glam::DVec3::X, offset: x };
     let crotch = body.points[&PointId::Crotch].position.y;

@@ -341,7 +341,12 @@ fn measure_body(body: &std::path::Path, landmarks: &std::path::Path) -> Result<(
 
 fn flatten_panel(path: &std::path::Path, plain: bool) -> Result<(), Box<dyn std::error::Error>> {
     use grade3d::pattern::flatten::{distortion, flatten, lscm, FlattenOptions};
+    use grade3d::pattern::panels::{PanelFace, PanelVertex};
+    use typed_index_collections::TiVec;
     let (positions, triangles) = grade3d::io::obj::read_obj(&std::fs::read_to_string(path)?)?;
+    // the OBJ's numbering is the panel's
+    let positions: TiVec<PanelVertex, _> = positions.into();
+    let triangles: TiVec<PanelFace, _> = triangles.iter().map(|t| t.map(PanelVertex)).collect();
     let start = std::time::Instant::now();
     lscm(&positions, &triangles)?;
     let lscm_ms = start.elapsed().as_secs_f64() * 1e3;
@@ -390,7 +395,8 @@ fn write_panels(dir: &std::path::Path) -> Result<(), Box<dyn std::error::Error>>
         let (panels, _) = grade3d::pattern::panels::cut(&t, &g.mesh.positions, &g.mesh.triangles, &g.lineage)?;
         for p in panels {
             let path = dir.join(format!("{}-{}.obj", t.name, p.name));
-            std::fs::write(&path, grade3d::io::obj::write_obj(&p.positions, None, &p.triangles))?;
+            let triangles: Vec<[u32; 3]> = p.triangles.iter().map(|t| t.map(|v| v.0)).collect();
+            std::fs::write(&path, grade3d::io::obj::write_obj(&p.positions.raw, None, &triangles))?;
             println!("wrote {} ({} vertices, {} triangles)", path.display(), p.positions.len(), p.triangles.len());
         }
     }

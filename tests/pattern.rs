@@ -157,7 +157,7 @@ fn patterns_on_every_body_meet_the_bars() {
             }
             // the pipeline's garment stays outside the body: every vertex, fixed ones
             // included, by the exact test, and no triangle through a body triangle
-            let pen = penetration_stats(&obstacle.tree, &g.mesh.positions);
+            let pen = penetration_stats(&obstacle.tree, &g.mesh.positions.raw);
             outside.0 = outside.0.max(pen.deepest_m * 1e3);
             outside.1 += pen.inside;
             outside.2 += g.collision.surface.pairs_before;

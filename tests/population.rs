@@ -154,7 +154,7 @@ fn run(range: std::ops::Range<usize>) {
             grades += 1;
             let at = |what: &str| format!("{} {what} on {name}", t.name);
             let key = t.name.clone();
-            let pen = penetration_stats(&obstacle.tree, &g.mesh.positions);
+            let pen = penetration_stats(&obstacle.tree, &g.mesh.positions.raw);
             deepest.entry(key.clone()).or_default().see(pen.deepest_m * 1e3, || at("deepest vertex"));
             *inside.entry(key.clone()).or_default() += pen.inside;
             *pairs_before.entry(key.clone()).or_default() += g.collision.surface.pairs_before;

@@ -21,14 +21,17 @@
 
 use std::time::Instant;
 
+use typed_index_collections::TiVec;
+
 use serde::{Deserialize, Serialize};
 
 use crate::body::feature::FeatureBody;
 use crate::collide::Obstacle;
+use crate::geom::mesh::VertexId;
 use crate::pattern::garment::{pattern_with_plan, DartPlan, GarmentPattern, PatternError, PatternOptions};
 use crate::refine::clear::{clear_coarse, clear_surface, ClearError, ClearOptions};
 use crate::refine::collision::{Collider, CollisionOptions, CollisionReport};
-use crate::refine::lineage::Lineage;
+use crate::refine::lineage::{node_vertex, Lineage};
 use crate::refine::subdivide::{
     refine, relax_tangentially, LevelReport, RefineError, RefineMesh, RefineOptions, Refined,
 };
@@ -156,13 +159,13 @@ pub struct Graded {
     /// leg girth): the vertices of `mesh` along the ring's profiles, by
     /// `ease_mm` name. The ease is measured on it
     /// ([`crate::body::ease::girth_ease`]).
-    pub girth_lines: std::collections::BTreeMap<String, Vec<u32>>,
+    pub girth_lines: std::collections::BTreeMap<String, Vec<VertexId>>,
     /// The surface the pattern was cut from (`mesh`'s positions before the
     /// surface lift, [`ClearOptions::pattern_before_lift`]; else `mesh`'s):
     /// the garment as made. Its girths are the garment's girths
     /// ([`crate::body::ease::girth_ease`]); the lift's local bumps over hip
     /// bones and knees are drape, not cloth length.
-    pub cut_positions: Vec<glam::DVec3>,
+    pub cut_positions: TiVec<VertexId, glam::DVec3>,
 }
 
 impl Graded {
@@ -172,8 +175,7 @@ impl Graded {
     /// # Errors
     /// [`crate::geom::mesh::MeshError`] if a position is not finite.
     pub fn cut_mesh(&self) -> Result<crate::geom::mesh::TriMesh, crate::geom::mesh::MeshError> {
-        let tris = self.mesh.triangles.iter().map(|t| t.map(crate::geom::mesh::VertexId)).collect();
-        crate::geom::mesh::TriMesh::new(self.cut_positions.clone(), tris)
+        crate::geom::mesh::TriMesh::new(self.cut_positions.raw.clone(), self.mesh.triangles.raw.clone())
     }
 }
 
@@ -186,22 +188,23 @@ fn girth_lines(
     coarse: &[glam::DVec3],
     hung: &[u32],
     refined: &RefineMesh,
-) -> std::collections::BTreeMap<String, Vec<u32>> {
+) -> std::collections::BTreeMap<String, Vec<VertexId>> {
     // every ring's template edges, then all their refined chains in one pass
-    let rings: Vec<(&String, Vec<(u32, u32)>)> = t
+    let rings: Vec<(&String, Vec<(VertexId, VertexId)>)> = t
         .ease_mm
         .keys()
         .filter_map(|name| {
             let &curve = ring_curves(name).first()?;
             let ring = ring_loop(t, body, coarse, curve, hung);
-            Some((name, ring.edges.iter().map(|&e| (t.edges[e as usize].start, t.edges[e as usize].end)).collect()))
+            let ends = |e: u32| (node_vertex(t.edges[e as usize].start), node_vertex(t.edges[e as usize].end));
+            Some((name, ring.edges.iter().map(|&e| ends(e)).collect()))
         })
         .collect();
-    let pairs: Vec<(u32, u32)> = rings.iter().flat_map(|r| r.1.iter().copied()).collect();
+    let pairs: Vec<(VertexId, VertexId)> = rings.iter().flat_map(|r| r.1.iter().copied()).collect();
     let mut chains = refined.profile_chains(&pairs).into_iter();
     let mut out = std::collections::BTreeMap::new();
     for (name, edges) in rings {
-        let mut line: Vec<u32> = chains.by_ref().take(edges.len()).flatten().flatten().collect();
+        let mut line: Vec<VertexId> = chains.by_ref().take(edges.len()).flatten().flatten().collect();
         line.sort_unstable();
         line.dedup();
         if line.len() >= 3 {
@@ -302,7 +305,7 @@ pub fn grade_with_plan(
     let refine_ms = ms(start);
 
     let start = Instant::now();
-    let cut_from = unlifted.as_deref().unwrap_or(&mesh.positions);
+    let cut_from = unlifted.as_deref().unwrap_or(mesh.positions.as_slice());
     // on a symmetric body the surface the pattern is cut from is made exactly symmetric
     let topology = Topology { triangles: &mesh.triangles, nodes: &decoded };
     let symmetric = symmetrize(t, body, cut_from, Some(topology), &opts.symmetry);
@@ -310,7 +313,7 @@ pub fn grade_with_plan(
     let pattern = pattern_with_plan(t, cut_from, &mesh.triangles, &lineage, size, &pattern_opts, plan)?;
     let pattern_ms = ms(start);
     let girth_lines = girth_lines(t, body, &decoded, &hung, &mesh);
-    let cut_positions = cut_from.to_vec();
+    let cut_positions = cut_from.to_owned();
     Ok(Graded {
         cut_positions,
         girth_lines,

@@ -224,7 +224,7 @@ pub fn fit_report(
 fn penetration(g: &Graded, body: &FeatureBody, ease_mm: &[f64], inside: usize) -> PenetrationReport {
     let deepest = ease_mm.iter().enumerate().filter(|(_, &e)| e < 0.0).min_by(|a, b| a.1.total_cmp(b.1));
     let nearest = deepest.and_then(|(i, _)| {
-        let p = g.mesh.positions[i];
+        let p = g.mesh.positions.raw[i];
         body.points.iter().min_by(|a, b| a.1.position.distance(p).total_cmp(&b.1.position.distance(p))).map(
             |(id, q)| NearestFeature {
                 feature_point: id.as_str().to_owned(),

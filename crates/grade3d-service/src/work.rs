@@ -35,7 +35,7 @@ use crate::body::feature::FeatureBody;
 use crate::body::measure::{measure, MeasureOptions};
 use crate::collide::cache::{BodyKey, Obstacle, ObstacleCache};
 use crate::collide::render::{GpuContext, RenderError, RenderOptions};
-use crate::geom::mesh::{TriMesh, VertexId};
+use crate::geom::mesh::TriMesh;
 use crate::geom::winding::WindingOptions;
 use crate::io::gltf::{read_mesh, write_glb, GlbAttribute, GltfError, GltfReadOptions};
 use crate::io::landmarks::{parse_landmarks, LandmarkFileError};
@@ -499,8 +499,7 @@ fn garment_glb(
     body: &FeatureBody,
     obstacle: Option<&Obstacle>,
 ) -> Result<(Vec<u8>, FitReport), WorkError> {
-    let tris: Vec<[VertexId; 3]> = g.mesh.triangles.iter().map(|t| t.map(VertexId)).collect();
-    let mesh = TriMesh::new(g.mesh.positions.clone(), tris).map_err(|e| WorkError::GarmentGlb(GltfError::Mesh(e)))?;
+    let mesh = g.mesh.to_tri_mesh().map_err(|e| WorkError::GarmentGlb(GltfError::Mesh(e)))?;
     let FitStep { ease_mm, report } = fit_report(t, g, body, obstacle, &FitReportOptions::default())?;
     let normals = mesh.vertex_normals();
     let ease_f32: Vec<f32> = ease_mm.iter().map(|&e| e as f32).collect();

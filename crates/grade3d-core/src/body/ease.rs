@@ -48,7 +48,7 @@ use serde::{Deserialize, Serialize};
 use crate::body::feature::FeatureBody;
 use crate::body::measure::{girth_of, MeasurementId};
 use crate::body::vocab::{point_def, CurveId};
-use crate::geom::mesh::{boundary_loops, TriMesh};
+use crate::geom::mesh::{boundary_loops, TriMesh, VertexId};
 use crate::geom::plane::Plane;
 use crate::geom::polyline::{tape_length, Polyline};
 use crate::geom::slice::slice;
@@ -132,11 +132,10 @@ fn is_opening(t: &Template, name: &str) -> bool {
 
 /// The boundary loops of a mesh as closed polylines.
 fn boundary_polylines(mesh: &TriMesh) -> Vec<Polyline> {
-    let tris: Vec<[u32; 3]> = mesh.triangles().iter().map(|t| t.map(|v| v.0)).collect();
-    boundary_loops(&tris)
+    boundary_loops(mesh.triangles())
         .into_iter()
         .filter(|ids| ids.len() >= 3)
-        .map(|ids| Polyline::new(ids.iter().map(|&v| mesh.positions()[v as usize]).collect(), true))
+        .map(|ids| Polyline::new(ids.iter().map(|&v| mesh.positions()[v.idx()]).collect(), true))
         .collect()
 }
 
@@ -156,7 +155,7 @@ pub fn girth_ease(
     garment: &TriMesh,
     t: &Template,
     expected: &BTreeMap<String, f64>,
-    lines: &BTreeMap<String, Vec<u32>>,
+    lines: &BTreeMap<String, Vec<VertexId>>,
     opts: &EaseOptions,
 ) -> Vec<GirthEase> {
     let round = |x: f64| if opts.round_mm > 0.0 { (x / opts.round_mm).round() * opts.round_mm } else { x };
@@ -171,7 +170,7 @@ pub fn girth_ease(
         let other: Option<DVec3> = mirror(id).and_then(|c| body.curves.get(&c)).map(|c| c.polyline.centroid());
         let ring_line = lines.get(name).map(|ids| {
             let p = garment.positions();
-            Polyline::new(ids.iter().filter_map(|&v| p.get(v as usize).copied()).collect(), true)
+            Polyline::new(ids.iter().filter_map(|&v| p.get(v.idx()).copied()).collect(), true)
         });
         let best = if let Some(l) = ring_line.filter(|l| l.points.len() >= 3) {
             Some((0.0, l))

@@ -40,7 +40,9 @@
 use glam::DVec3;
 use robust::{orient3d, Coord3D};
 
-use crate::geom::mesh::{FaceId, TriMesh};
+use typed_index_collections::TiSlice;
+
+use crate::geom::mesh::{FaceId, TriMesh, VertexId};
 use crate::geom::winding::WindingTree;
 
 #[inline]
@@ -79,8 +81,8 @@ pub fn triangles_intersect(s: [DVec3; 3], t: [DVec3; 3]) -> bool {
 /// One garment triangle through one body triangle.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct IntersectingPair {
-    /// The garment triangle (index into the garment's triangle list).
-    pub garment: u32,
+    /// The garment triangle.
+    pub garment: FaceId,
     /// The body triangle.
     pub body: FaceId,
 }
@@ -88,11 +90,15 @@ pub struct IntersectingPair {
 /// Every garment triangle that intersects a body triangle, with the body
 /// triangle; in garment order, then body face order (deterministic).
 /// Triangles are vertex ids into `positions`.
-pub fn intersecting_pairs(tree: &WindingTree, positions: &[DVec3], triangles: &[[u32; 3]]) -> Vec<IntersectingPair> {
+pub fn intersecting_pairs(
+    tree: &WindingTree,
+    positions: &TiSlice<VertexId, DVec3>,
+    triangles: &TiSlice<FaceId, [VertexId; 3]>,
+) -> Vec<IntersectingPair> {
     let mut out = Vec::new();
     let mut found = Vec::new();
-    for (g, tri) in triangles.iter().enumerate() {
-        let s = tri.map(|v| positions[v as usize]);
+    for (g, tri) in triangles.iter_enumerated() {
+        let s = tri.map(|v| positions[v]);
         let lo = s[0].min(s[1]).min(s[2]);
         let hi = s[0].max(s[1]).max(s[2]);
         found.clear();
@@ -102,7 +108,7 @@ pub fn intersecting_pairs(tree: &WindingTree, positions: &[DVec3], triangles: &[
             }
         });
         found.sort_unstable_by_key(|f| f.0);
-        out.extend(found.iter().map(|&body| IntersectingPair { garment: g as u32, body }));
+        out.extend(found.iter().map(|&body| IntersectingPair { garment: g, body }));
     }
     out
 }
@@ -132,7 +138,7 @@ pub fn self_intersections(tree: &WindingTree, mesh: &TriMesh) -> Vec<(FaceId, Fa
 
 /// Counts of [`intersecting_pairs`]: pairs, and distinct garment triangles.
 pub fn count_pairs(pairs: &[IntersectingPair]) -> (usize, usize) {
-    let mut g: Vec<u32> = pairs.iter().map(|p| p.garment).collect();
+    let mut g: Vec<FaceId> = pairs.iter().map(|p| p.garment).collect();
     g.dedup();
     (pairs.len(), g.len())
 }
@@ -144,6 +150,7 @@ mod tests {
     use crate::geom::winding::WindingOptions;
     use glam::DQuat;
     use proptest::prelude::*;
+    use typed_index_collections::TiVec;
 
     fn tri(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> [DVec3; 3] {
         [DVec3::from_array(a), DVec3::from_array(b), DVec3::from_array(c)]
@@ -210,25 +217,26 @@ mod tests {
         let mut tris = Vec::new();
         for j in 0..n {
             for i in 0..n {
-                let v = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+                let v = |i: usize, j: usize| VertexId::from(j * (n + 1) + i);
                 tris.push([v(i, j), v(i + 1, j), v(i + 1, j + 1)]);
                 tris.push([v(i, j), v(i + 1, j + 1), v(i, j + 1)]);
             }
         }
+        let (pos, tris): (TiVec<VertexId, DVec3>, TiVec<FaceId, _>) = (pos.into(), tris.into());
         let fast = intersecting_pairs(&tree, &pos, &tris);
         let mut brute = Vec::new();
-        for (g, t) in tris.iter().enumerate() {
-            let s = t.map(|v| pos[v as usize]);
+        for (g, t) in tris.iter_enumerated() {
+            let s = t.map(|v| pos[v]);
             for f in 0..body.face_count() {
                 if triangles_intersect(s, body.corners(FaceId(f as u32))) {
-                    brute.push(IntersectingPair { garment: g as u32, body: FaceId(f as u32) });
+                    brute.push(IntersectingPair { garment: g, body: FaceId(f as u32) });
                 }
             }
         }
         assert!(!brute.is_empty());
         assert_eq!(fast, brute);
         // a sheet above the sphere touches nothing
-        let above: Vec<DVec3> = pos.iter().map(|p| *p + DVec3::Z * 0.2).collect();
+        let above: TiVec<VertexId, DVec3> = pos.iter().map(|p| *p + DVec3::Z * 0.2).collect();
         assert!(intersecting_pairs(&tree, &above, &tris).is_empty());
         let (pairs, garment) = count_pairs(&fast);
         assert!(garment <= pairs && garment > 0);
@@ -251,8 +259,8 @@ mod tests {
             let dir = DVec3::ONE.normalize();
             let centre = dir * (1.0 / 3f64.sqrt() + offset - 0.15);
             let small = octahedron(centre, 0.1);
-            let pos: Vec<DVec3> = small.positions().iter().map(|&p| rot * p + t).collect();
-            let tris: Vec<[u32; 3]> = small.triangles().iter().map(|f| f.map(|v| v.0)).collect();
+            let pos: TiVec<VertexId, DVec3> = small.positions().iter().map(|&p| rot * p + t).collect();
+            let tris: TiVec<FaceId, [VertexId; 3]> = small.triangles().to_vec().into();
             let tree = WindingTree::new(&big, &WindingOptions::default());
             let hits = intersecting_pairs(&tree, &pos, &tris);
             // the face x+y+z = 1 is at distance 1/√3; the small body spans ±0.1 along `dir`

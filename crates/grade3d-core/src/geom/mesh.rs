@@ -7,31 +7,79 @@
 //! Units are whatever the caller uses; the body layer works in metres.
 
 use glam::DVec3;
-use serde::{Deserialize, Serialize};
 
-/// Index of a vertex in a [`TriMesh`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
-pub struct VertexId(pub u32);
+/// A typed index into per-element data (issue #16, item 2): a `u32`
+/// newtype per kind of element, so that a panel's local vertex cannot be
+/// used where a garment-mesh vertex is meant. Every id type implements
+/// [`MeshIndex`], indexes [`TiVec`](typed_index_collections::TiVec)s
+/// (per-element data), prints as its number and serialises as it.
+///
+/// Conversion from `usize` truncates to 32 bits: every mesh that mints ids
+/// refuses more than `u32::MAX` elements first ([`MeshError::TooLarge`] and
+/// its counterparts in refine and flatten).
+macro_rules! typed_id {
+    ($(#[$meta:meta])* $name:ident) => {
+        $(#[$meta])*
+        #[derive(
+            Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize, serde::Deserialize,
+        )]
+        #[serde(transparent)]
+        pub struct $name(pub u32);
 
-/// Index of a triangle in a [`TriMesh`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
-pub struct FaceId(pub u32);
+        impl $name {
+            /// The index as `usize`.
+            #[inline]
+            pub fn idx(self) -> usize {
+                self.0 as usize
+            }
+        }
 
-impl VertexId {
-    /// The index as `usize`.
-    #[inline]
-    pub fn idx(self) -> usize {
-        self.0 as usize
-    }
+        impl From<usize> for $name {
+            #[inline]
+            fn from(i: usize) -> Self {
+                debug_assert!(u32::try_from(i).is_ok(), "index {i} exceeds u32");
+                Self(i as u32)
+            }
+        }
+
+        impl From<$name> for usize {
+            #[inline]
+            fn from(i: $name) -> usize {
+                i.0 as usize
+            }
+        }
+
+        impl std::fmt::Display for $name {
+            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                self.0.fmt(f)
+            }
+        }
+
+        impl $crate::geom::mesh::MeshIndex for $name {}
+    };
+}
+pub(crate) use typed_id;
+
+/// What every typed element id is ([`typed_id!`]): copyable, ordered,
+/// printable, convertible to and from a `usize` position. The topology
+/// checks ([`crate::geom::topology`]) are generic over it.
+pub trait MeshIndex:
+    Copy + Ord + std::hash::Hash + std::fmt::Debug + std::fmt::Display + From<usize> + Into<usize>
+{
 }
 
-impl FaceId {
-    /// The index as `usize`.
-    #[inline]
-    pub fn idx(self) -> usize {
-        self.0 as usize
-    }
-}
+typed_id!(
+    /// Index of a vertex of a mesh: a [`TriMesh`]'s, or the garment mesh a
+    /// refinement makes ([`crate::refine::subdivide::RefineMesh`]), whose
+    /// first vertices are the template's nodes in their order.
+    VertexId
+);
+
+typed_id!(
+    /// Index of a triangle of a mesh (a [`TriMesh`]'s, or the triangle list
+    /// at hand: a panel's faces are numbered in [`crate::pattern::panels::Panel::triangles`]).
+    FaceId
+);
 
 /// What is wrong with a mesh handed to [`TriMesh::new`].
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -334,18 +382,16 @@ impl TriMesh {
 
 /// Boundary loops of a triangle list (vertex ids), each run along its
 /// faces' orientation: chains of half-edges with no opposite half-edge.
-pub fn boundary_loops(triangles: &[[u32; 3]]) -> Vec<Vec<u32>> {
+pub fn boundary_loops<V: Copy + Ord>(triangles: &[[V; 3]]) -> Vec<Vec<V>> {
     // every directed half-edge once, sorted
-    let mut half: Vec<(u32, u32)> =
-        triangles.iter().flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3]))).collect();
+    let mut half: Vec<(V, V)> = triangles.iter().flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3]))).collect();
     half.sort_unstable();
     half.dedup();
     // boundary half-edges (no opposite half-edge), sorted by tail then head
-    let boundary: Vec<(u32, u32)> =
-        half.iter().copied().filter(|&(a, b)| half.binary_search(&(b, a)).is_err()).collect();
+    let boundary: Vec<(V, V)> = half.iter().copied().filter(|&(a, b)| half.binary_search(&(b, a)).is_err()).collect();
     // per tail vertex, ascending: its range of boundary half-edges; a walk takes the
     // highest head left first (the range's end moves down)
-    let mut tails: Vec<u32> = Vec::new();
+    let mut tails: Vec<V> = Vec::new();
     let mut range: Vec<[usize; 2]> = Vec::new();
     for (i, &(a, _)) in boundary.iter().enumerate() {
         match tails.last() {
@@ -448,7 +494,7 @@ mod tests {
         // two cells touching at one vertex (non-manifold): the walk still agrees
         let bowtie = grid_cells(2, &[true, false, false, true]);
         assert_eq!(boundary_loops(&bowtie), boundary_loops_reference(&bowtie));
-        assert!(boundary_loops(&[]).is_empty());
+        assert!(boundary_loops::<u32>(&[]).is_empty());
     }
 
     proptest! {

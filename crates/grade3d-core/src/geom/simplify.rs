@@ -306,8 +306,7 @@ struct Analysis {
 fn analyse(mesh: &TriMesh) -> Result<Analysis, SimplifyError> {
     let tris = mesh.triangles();
     let n = mesh.vertex_count();
-    let raw: Vec<[u32; 3]> = tris.iter().map(|t| t.map(|v| v.0)).collect();
-    let checked = check_edge_uses(triangle_edge_uses(&raw))?;
+    let checked = check_edge_uses(triangle_edge_uses(tris))?;
     let edges: Vec<(u32, u32)> = checked.iter().map(|e| (e.edge.a.0, e.edge.b.0)).collect();
     let boundary_halfedges: Vec<(u32, u32, u32)> = checked
         .iter()
@@ -337,11 +336,11 @@ fn analyse(mesh: &TriMesh) -> Result<Analysis, SimplifyError> {
     }
 
     // Vertex fans: the corners around each vertex must form one fan.
-    check_vertex_fans(&raw, n, &checked)?;
+    check_vertex_fans(tris, n, &checked)?;
     let mut referenced_vertex = vec![false; n];
-    for t in &raw {
+    for t in tris {
         for &v in t {
-            referenced_vertex[v as usize] = true;
+            referenced_vertex[v.idx()] = true;
         }
     }
     let referenced = referenced_vertex.iter().filter(|&&r| r).count();
@@ -1325,13 +1324,16 @@ mod tests {
         // edge (0,1) shared by three triangles
         let p = vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z, DVec3::NEG_Y];
         let m = TriMesh::from_raw(p.clone(), &[[0, 1, 2], [1, 0, 3], [0, 1, 4]]).unwrap();
-        let want = SimplifyError::Topology(TopologyError::NonManifoldEdge { edge: MeshEdge::new(0, 1), faces: 3 });
+        let want = SimplifyError::Topology(TopologyError::NonManifoldEdge {
+            edge: MeshEdge::new(VertexId(0), VertexId(1)),
+            faces: 3,
+        });
         assert_eq!(check_oriented_manifold(&m).unwrap_err(), want);
         assert_eq!(simplify(&m, &[], &SimplifyOptions::default()).unwrap_err(), want);
         // edge (1,2) used twice in the direction 1 → 2
         let m = TriMesh::from_raw(p.clone(), &[[0, 1, 2], [3, 1, 2]]).unwrap();
         let want = SimplifyError::Topology(TopologyError::InconsistentOrientation {
-            edge: MeshEdge::new(1, 2),
+            edge: MeshEdge::new(VertexId(1), VertexId(2)),
             face_a: FaceId(0),
             face_b: FaceId(1),
         });

@@ -23,34 +23,39 @@
 
 use std::fmt;
 
-use crate::geom::mesh::{FaceId, VertexId};
+use crate::geom::mesh::{FaceId, MeshIndex, VertexId};
 
-/// An undirected edge of a mesh, its lower vertex first.
+/// An undirected edge of a mesh, its lower vertex first; `V` is the kind of
+/// vertex id (a garment mesh's [`VertexId`], a panel's local id, …).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub struct MeshEdge {
+pub struct MeshEdge<V = VertexId> {
     /// The lower vertex id.
-    pub a: VertexId,
+    pub a: V,
     /// The higher vertex id.
-    pub b: VertexId,
+    pub b: V,
 }
 
-impl MeshEdge {
+impl<V: Ord> MeshEdge<V> {
     /// The edge between `u` and `v`, in either order.
-    pub fn new(u: u32, v: u32) -> Self {
-        Self { a: VertexId(u.min(v)), b: VertexId(u.max(v)) }
+    pub fn new(u: V, v: V) -> Self {
+        if u <= v {
+            Self { a: u, b: v }
+        } else {
+            Self { a: v, b: u }
+        }
     }
 }
 
-impl fmt::Display for MeshEdge {
+impl<V: fmt::Display> fmt::Display for MeshEdge<V> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}–{}", self.a.0, self.b.0)
+        write!(f, "{}–{}", self.a, self.b)
     }
 }
 
 /// Why a set of faces is not an oriented manifold. `E` names edges: a
-/// [`MeshEdge`], or a template's edge id.
+/// [`MeshEdge`], or a template's edge id; `V` names vertices.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-pub enum TopologyError<E: fmt::Display> {
+pub enum TopologyError<E: fmt::Display, V: fmt::Display = VertexId> {
     /// More than two faces use one edge.
     #[error("edge {edge} is shared by {faces} faces (non-manifold)")]
     NonManifoldEdge {
@@ -70,26 +75,26 @@ pub enum TopologyError<E: fmt::Display> {
         face_b: FaceId,
     },
     /// The faces around a vertex form more than one fan (a "bow tie").
-    #[error("the faces around vertex {} form {fans} separate fans (non-manifold vertex)", vertex.0)]
+    #[error("the faces around vertex {vertex} form {fans} separate fans (non-manifold vertex)")]
     NonManifoldVertex {
         /// The vertex.
-        vertex: VertexId,
+        vertex: V,
         /// How many fans.
         fans: usize,
     },
 }
 
-impl TopologyError<MeshEdge> {
+impl<V: MeshIndex> TopologyError<MeshEdge<V>, V> {
     /// The same error with its vertex ids mapped by `f` (a caller's compact
-    /// numbering back to its input's); `f` must keep their order.
-    pub fn map_vertices(self, f: impl Fn(u32) -> u32) -> Self {
-        let edge = |e: MeshEdge| MeshEdge::new(f(e.a.0), f(e.b.0));
+    /// numbering back to its input's).
+    pub fn map_vertices<W: MeshIndex>(self, f: impl Fn(V) -> W) -> TopologyError<MeshEdge<W>, W> {
+        let edge = |e: MeshEdge<V>| MeshEdge::new(f(e.a), f(e.b));
         match self {
-            Self::NonManifoldEdge { edge: e, faces } => Self::NonManifoldEdge { edge: edge(e), faces },
+            Self::NonManifoldEdge { edge: e, faces } => TopologyError::NonManifoldEdge { edge: edge(e), faces },
             Self::InconsistentOrientation { edge: e, face_a, face_b } => {
-                Self::InconsistentOrientation { edge: edge(e), face_a, face_b }
+                TopologyError::InconsistentOrientation { edge: edge(e), face_a, face_b }
             }
-            Self::NonManifoldVertex { vertex, fans } => Self::NonManifoldVertex { vertex: VertexId(f(vertex.0)), fans },
+            Self::NonManifoldVertex { vertex, fans } => TopologyError::NonManifoldVertex { vertex: f(vertex), fans },
         }
     }
 }
@@ -124,9 +129,9 @@ pub struct EdgeFaces<E> {
 /// # Errors
 /// [`TopologyError::NonManifoldEdge`] or
 /// [`TopologyError::InconsistentOrientation`] for the first offending edge.
-pub fn check_edge_uses<E: Ord + Copy + fmt::Display>(
+pub fn check_edge_uses<E: Ord + Copy + fmt::Display, V: fmt::Display>(
     mut uses: Vec<(E, EdgeUse)>,
-) -> Result<Vec<EdgeFaces<E>>, TopologyError<E>> {
+) -> Result<Vec<EdgeFaces<E>>, TopologyError<E, V>> {
     uses.sort_unstable();
     let mut out = Vec::with_capacity(uses.len() / 2 + 1);
     for group in uses.chunk_by(|x, y| x.0 == y.0) {
@@ -147,12 +152,12 @@ pub fn check_edge_uses<E: Ord + Copy + fmt::Display>(
 
 /// The edge uses of indexed triangles (vertex-pair edges), for
 /// [`check_edge_uses`].
-pub fn triangle_edge_uses(triangles: &[[u32; 3]]) -> Vec<(MeshEdge, EdgeUse)> {
+pub fn triangle_edge_uses<V: MeshIndex>(triangles: &[[V; 3]]) -> Vec<(MeshEdge<V>, EdgeUse)> {
     let mut uses = Vec::with_capacity(3 * triangles.len());
     for (f, t) in triangles.iter().enumerate() {
         for k in 0..3 {
             let (u, v) = (t[k], t[(k + 1) % 3]);
-            uses.push((MeshEdge::new(u, v), EdgeUse { face: FaceId(f as u32), corner: k as u8, forward: u < v }));
+            uses.push((MeshEdge::new(u, v), EdgeUse { face: FaceId::from(f), corner: k as u8, forward: u < v }));
         }
     }
     uses
@@ -164,11 +169,11 @@ pub fn triangle_edge_uses(triangles: &[[u32; 3]]) -> Vec<(MeshEdge, EdgeUse)> {
 ///
 /// # Errors
 /// [`TopologyError::NonManifoldVertex`] for the lowest offending vertex.
-pub fn check_vertex_fans<E: fmt::Display>(
-    triangles: &[[u32; 3]],
+pub fn check_vertex_fans<E: fmt::Display, V: MeshIndex>(
+    triangles: &[[V; 3]],
     vertices: usize,
-    edges: &[EdgeFaces<MeshEdge>],
-) -> Result<(), TopologyError<E>> {
+    edges: &[EdgeFaces<MeshEdge<V>>],
+) -> Result<(), TopologyError<E, V>> {
     let corner = |u: EdgeUse| 3 * u.face.0 + u32::from(u.corner);
     let next = |c: u32| 3 * (c / 3) + (c % 3 + 1) % 3;
     let mut fans = UnionFind::new(3 * triangles.len());
@@ -183,11 +188,11 @@ pub fn check_vertex_fans<E: fmt::Display>(
     }
     // each vertex's first fan, one pass over the corners; the fan count only for the offender
     let mut first = vec![u32::MAX; vertices];
-    let mut offender: Option<u32> = None;
+    let mut offender: Option<V> = None;
     for (f, t) in triangles.iter().enumerate() {
         for (k, &v) in t.iter().enumerate() {
             let root = fans.find(3 * f as u32 + k as u32);
-            match first.get_mut(v as usize) {
+            match first.get_mut(v.into()) {
                 Some(r) if *r == u32::MAX => *r = root,
                 Some(r) if *r != root => offender = Some(offender.map_or(v, |o| o.min(v))),
                 _ => {}
@@ -203,7 +208,7 @@ pub fn check_vertex_fans<E: fmt::Display>(
         }
         roots.sort_unstable();
         roots.dedup();
-        return Err(TopologyError::NonManifoldVertex { vertex: VertexId(v), fans: roots.len() });
+        return Err(TopologyError::NonManifoldVertex { vertex: v, fans: roots.len() });
     }
     Ok(())
 }
@@ -248,6 +253,8 @@ mod tests {
     type R = Result<(), TopologyError<MeshEdge>>;
 
     fn check(tris: &[[u32; 3]], n: usize) -> R {
+        let tris: Vec<[VertexId; 3]> = tris.iter().map(|t| t.map(VertexId)).collect();
+        let tris = &tris[..];
         let edges = check_edge_uses(triangle_edge_uses(tris))?;
         check_vertex_fans(tris, n, &edges)
     }
@@ -256,7 +263,7 @@ mod tests {
     fn a_closed_octahedron_passes_with_12_interior_edges() {
         // element counts: 8 faces, 12 edges, each used twice
         let tris = [[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]];
-        let edges = check_edge_uses(triangle_edge_uses(&tris)).unwrap();
+        let edges = check_edge_uses::<_, VertexId>(triangle_edge_uses(&tris.map(|t| t.map(VertexId)))).unwrap();
         assert_eq!(edges.len(), 12);
         assert!(edges.iter().all(|e| e.second.is_some()));
         assert_eq!(check(&tris, 6), Ok(()));
@@ -265,12 +272,15 @@ mod tests {
     #[test]
     fn the_three_offences_are_named() {
         let fin = [[0, 1, 2], [1, 0, 3], [1, 0, 4]];
-        assert_eq!(check(&fin, 5), Err(TopologyError::NonManifoldEdge { edge: MeshEdge::new(0, 1), faces: 3 }));
+        assert_eq!(
+            check(&fin, 5),
+            Err(TopologyError::NonManifoldEdge { edge: MeshEdge::new(VertexId(0), VertexId(1)), faces: 3 })
+        );
         let twisted = [[0, 1, 2], [0, 1, 3]];
         assert_eq!(
             check(&twisted, 4),
             Err(TopologyError::InconsistentOrientation {
-                edge: MeshEdge::new(0, 1),
+                edge: MeshEdge::new(VertexId(0), VertexId(1)),
                 face_a: FaceId(0),
                 face_b: FaceId(1)
             })

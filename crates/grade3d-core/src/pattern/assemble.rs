@@ -50,11 +50,14 @@ use std::collections::{BTreeMap, HashSet};
 use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
-use super::panels::{Panel, SeamChain};
+use typed_index_collections::{TiSlice, TiVec};
+
+use super::panels::{Panel, PanelVertex, SeamChain};
 use super::piece::{GradePoint, GradePointKind, InternalLine, PatternPiece, PieceNotch};
 use crate::body::vocab::{point_def, CurveId, PointId};
+use crate::geom::mesh::VertexId;
 use crate::geom::polyline::segment_crosses_polygon;
-use crate::refine::lineage::Lineage;
+use crate::refine::lineage::{node_vertex, vertex_node, Lineage};
 use crate::template::format::Template;
 use crate::template::girth::RING_PLANE_TOLERANCE_M;
 
@@ -116,7 +119,7 @@ pub struct PlacedPanel {
     /// The pattern piece.
     pub piece: PatternPiece,
     /// Every panel vertex in piece coordinates, mm (local ids of the [`Panel`]).
-    pub uv_mm: Vec<DVec2>,
+    pub uv_mm: TiVec<PanelVertex, DVec2>,
 }
 
 /// Figures of one seam: the two sides' 2D lengths against the 3D length.
@@ -151,7 +154,7 @@ pub fn assemble(
     panel: &Panel,
     seams: &[SeamChain],
     lineage: &Lineage,
-    uv: &[DVec2],
+    uv: &TiSlice<PanelVertex, DVec2>,
     size: &str,
     opts: &PieceOptions,
 ) -> Result<PlacedPanel, PieceError> {
@@ -160,28 +163,29 @@ pub fn assemble(
         return Err(PieceError::UvCount { panel: name(), uv: uv.len(), vertices: panel.positions.len() });
     }
     let template_panel = &t.panels[panel.index];
-    let node_local = |node: u32| panel.local(node).ok_or(PieceError::GrainOffPanel { panel: name(), node });
+    let node_local =
+        |node: u32| panel.local(node_vertex(node)).ok_or(PieceError::GrainOffPanel { panel: name(), node });
     let (from, to) = (node_local(template_panel.grain.from)?, node_local(template_panel.grain.to)?);
-    let mut pts: Vec<DVec2> = uv.iter().map(|p| *p * MM_PER_M).collect();
+    let mut pts: TiVec<PanelVertex, DVec2> = uv.iter().map(|p| *p * MM_PER_M).collect();
     let rim = panel.rim();
-    let outline_pts: Vec<DVec2> = rim.iter().map(|&l| pts[l as usize]).collect();
+    let outline_pts: Vec<DVec2> = rim.iter().map(|&l| pts[l]).collect();
     if signed_area(&outline_pts) < 0.0 {
         pts.iter_mut().for_each(|p| p.x = -p.x);
     }
-    let grain = pts[to as usize] - pts[from as usize];
+    let grain = pts[to] - pts[from];
     if grain.length() <= f64::EPSILON {
         return Err(PieceError::DegenerateGrain { panel: name() });
     }
     // rotate grain onto −y: angle of grain to angle −π/2
     let rot = DVec2::from_angle(-std::f64::consts::FRAC_PI_2 - grain.y.atan2(grain.x));
-    let origin = pts[from as usize];
-    let pts: Vec<DVec2> = pts.iter().map(|&p| rot.rotate(p - origin)).collect();
+    let origin = pts[from];
+    let pts: TiVec<PanelVertex, DVec2> = pts.iter().map(|&p| rot.rotate(p - origin)).collect();
 
-    let n_nodes = t.nodes.len() as u32;
-    let sew_line: Vec<DVec2> = rim.iter().map(|&l| pts[l as usize]).collect();
-    let global_of = |k: usize| panel.global[rim[k] as usize];
-    // seam ends (template nodes) touching this panel
-    let seam_ends: HashSet<u32> = seams
+    let sew_line: Vec<DVec2> = rim.iter().map(|&l| pts[l]).collect();
+    // the template node at the k-th point of the sew line, if it is one
+    let node_at = |k: usize| vertex_node(panel.global[rim[k]], t.nodes.len());
+    // seam ends (fine vertices) touching this panel
+    let seam_ends: HashSet<VertexId> = seams
         .iter()
         .filter(|s| s.panel_a == panel.index || s.panel_b == panel.index)
         .flat_map(|s| [s.chain.first().copied(), s.chain.last().copied()])
@@ -191,11 +195,10 @@ pub fn assemble(
     let cos_limit = opts.corner_angle_deg.to_radians().cos();
     let corners: Vec<usize> = (0..n)
         .filter(|&k| {
-            let g = global_of(k);
-            if g >= n_nodes {
+            if node_at(k).is_none() {
                 return false;
             }
-            if seam_ends.contains(&g) {
+            if seam_ends.contains(&panel.global[rim[k]]) {
                 return true;
             }
             let (a, b) = (sew_line[k] - sew_line[(k + n - 1) % n], sew_line[(k + 1) % n] - sew_line[k]);
@@ -208,7 +211,7 @@ pub fn assemble(
     // labels: the node's feature point, with the node id where a panel repeats it
     let mut count: BTreeMap<&str, usize> = BTreeMap::new();
     for k in 0..n {
-        if let Some(node) = t.nodes.get(global_of(k) as usize) {
+        if let Some(node) = node_at(k).and_then(|i| t.nodes.get(i as usize)) {
             *count.entry(node.point.as_str()).or_default() += 1;
         }
     }
@@ -225,16 +228,11 @@ pub fn assemble(
     // whatever the local turning angle), then the notches
     let mut seen = HashSet::new();
     let mut grade_points: Vec<GradePoint> = (0..n)
-        .filter(|&k| global_of(k) < n_nodes && seen.insert(global_of(k)))
-        .map(|k| GradePoint {
-            node: global_of(k),
-            label: label(global_of(k)),
-            at: sew_line[k],
-            kind: GradePointKind::Corner,
-        })
+        .filter_map(|k| node_at(k).filter(|&node| seen.insert(node)).map(|node| (k, node)))
+        .map(|(k, node)| GradePoint { node, label: label(node), at: sew_line[k], kind: GradePointKind::Corner })
         .collect();
     for notch in &t.notches {
-        let Some(k) = (0..n).find(|&k| global_of(k) == notch.node) else { continue };
+        let Some(k) = (0..n).find(|&k| node_at(k) == Some(notch.node)) else { continue };
         let outward = vertex_normal(&sew_line, k);
         let at = sew_line[k];
         notches.push(PieceNotch { name: notch.name.clone(), at, outward, on_cut_line: at + outward * allowance });
@@ -245,13 +243,10 @@ pub fn assemble(
         // the dart's legs, straight (opening → apex → opening), or as flattened where a
         // straight leg would leave the piece (a dart from a concave seam)
         let (Some(&mouth_a), Some(&apex), Some(&mouth_b)) = (d.a.first(), d.a.last(), d.b.first()) else { continue };
-        let straight = vec![pts[mouth_a as usize], pts[apex as usize], pts[mouth_b as usize]];
+        let straight = vec![pts[mouth_a], pts[apex], pts[mouth_b]];
         let leaves = straight.windows(2).any(|leg| segment_crosses_polygon(leg[0], leg[1], &sew_line));
-        let points = if leaves {
-            d.a.iter().chain(d.b.iter().rev().skip(1)).map(|&l| pts[l as usize]).collect()
-        } else {
-            straight
-        };
+        let points =
+            if leaves { d.a.iter().chain(d.b.iter().rev().skip(1)).map(|&l| pts[l]).collect() } else { straight };
         internal_lines.push(InternalLine { name: d.name.clone(), points });
     }
     let grain_len = grain.length();
@@ -290,8 +285,13 @@ pub const GIRTH_CURVES: [CurveId; 12] = [
 ];
 
 /// Interior girth lines of the panel (module docs), merged into polylines.
-fn internal_lines(t: &Template, panel: &Panel, lineage: &Lineage, pts: &[DVec2]) -> Vec<InternalLine> {
-    let on_outline: HashSet<u32> = panel.outline.iter().copied().collect();
+fn internal_lines(
+    t: &Template,
+    panel: &Panel,
+    lineage: &Lineage,
+    pts: &TiSlice<PanelVertex, DVec2>,
+) -> Vec<InternalLine> {
+    let on_outline: HashSet<PanelVertex> = panel.outline.iter().copied().collect();
     // the girth both nodes of an edge lie on, if any (module docs)
     let girth = |e: &crate::template::format::Edge| -> Option<CurveId> {
         let (na, nb) = (&t.nodes[e.start as usize], &t.nodes[e.end as usize]);
@@ -304,13 +304,15 @@ fn internal_lines(t: &Template, panel: &Panel, lineage: &Lineage, pts: &[DVec2])
         GIRTH_CURVES.iter().copied().find(|c| curves(na.point).contains(c) && curves(nb.point).contains(c))
     };
     let side = |s: &'static str| s.strip_suffix("_left").or_else(|| s.strip_suffix("_right")).unwrap_or(s);
-    let local_chain = |a: u32, b: u32| -> Option<Vec<u32>> {
-        lineage.chain(a, b)?.iter().map(|&g| panel.local(g)).collect::<Option<Vec<u32>>>()
+    let local_chain = |a: u32, b: u32| -> Option<Vec<PanelVertex>> {
+        lineage.chain(node_vertex(a), node_vertex(b))?.iter().map(|&g| panel.local(g)).collect()
     };
     // per girth: the fine chains of its interior edges
-    let mut lines: Vec<(String, Vec<u32>)> = Vec::new();
+    let mut lines: Vec<(String, Vec<PanelVertex>)> = Vec::new();
     for e in &t.edges {
-        let (Some(a), Some(b)) = (panel.local(e.start), panel.local(e.end)) else { continue };
+        let (Some(a), Some(b)) = (panel.local(node_vertex(e.start)), panel.local(node_vertex(e.end))) else {
+            continue;
+        };
         let Some(curve) = girth(e) else { continue };
         if on_outline.contains(&a) && on_outline.contains(&b) {
             continue;
@@ -322,14 +324,15 @@ fn internal_lines(t: &Template, panel: &Panel, lineage: &Lineage, pts: &[DVec2])
     // its line runs on to the crotch on the outline
     let crotch: Vec<u32> = (0..t.nodes.len() as u32)
         .filter(|&n| {
-            t.nodes[n as usize].point == PointId::Crotch && panel.local(n).is_some_and(|l| on_outline.contains(&l))
+            t.nodes[n as usize].point == PointId::Crotch
+                && panel.local(node_vertex(n)).is_some_and(|l| on_outline.contains(&l))
         })
         .collect();
-    let ends_inside = |l: u32| !on_outline.contains(&l);
+    let ends_inside = |l: PanelVertex| !on_outline.contains(&l);
     let mut closures = Vec::new();
     for (name, chain) in &lines {
         for &end in [chain[0], chain[chain.len() - 1]].iter().filter(|&&l| ends_inside(l)) {
-            let node = panel.global[end as usize];
+            let Some(node) = vertex_node(panel.global[end], t.nodes.len()) else { continue };
             for e in t.edges.iter().filter(|e| !e.profile.is_empty()) {
                 let other = if e.start == node {
                     e.end
@@ -348,7 +351,7 @@ fn internal_lines(t: &Template, panel: &Panel, lineage: &Lineage, pts: &[DVec2])
     }
     lines.extend(closures);
     // chains of one girth joined end to end until none shares an end with another
-    let mut merged: Vec<(String, Vec<u32>)> = Vec::new();
+    let mut merged: Vec<(String, Vec<PanelVertex>)> = Vec::new();
     for (name, chain) in lines {
         merged.push((name, chain));
         loop {
@@ -377,10 +380,7 @@ fn internal_lines(t: &Template, panel: &Panel, lineage: &Lineage, pts: &[DVec2])
         }
     }
     let lines = merged;
-    lines
-        .into_iter()
-        .map(|(name, ids)| InternalLine { name, points: ids.iter().map(|&l| pts[l as usize]).collect() })
-        .collect()
+    lines.into_iter().map(|(name, ids)| InternalLine { name, points: ids.iter().map(|&l| pts[l]).collect() }).collect()
 }
 
 /// Signed area of a closed polygon (positive counter-clockwise).

@@ -48,8 +48,11 @@ use serde::{Deserialize, Serialize};
 
 use super::assemble::{polyline_length_3d, self_intersects};
 use super::flatten::{Distortion, Flattening};
-use super::panels::{DartLegs, Panel};
+use typed_index_collections::{TiSlice, TiVec};
+
+use super::panels::{DartLegs, Panel, PanelFace, PanelVertex};
 use crate::geom::polyline::segment_crosses_polygon;
+use crate::refine::lineage::vertex_node;
 
 /// Knobs of the dart search.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -145,13 +148,13 @@ pub enum DartOrigin {
 /// between its two mouths on the sew line, negative when the legs cross (the
 /// bridge from the first mouth to the second points against the sew line's
 /// run). `None` when a mouth is not on the rim.
-pub fn dart_opening(rim: &[u32], uv: &[DVec2], dart: &DartLegs) -> Option<f64> {
+pub fn dart_opening(rim: &[PanelVertex], uv: &TiSlice<PanelVertex, DVec2>, dart: &DartLegs) -> Option<f64> {
     let n = rim.len();
     let (Some(i), Some(j)) = (rim.iter().position(|&v| v == dart.a[0]), rim.iter().position(|&v| v == dart.b[0]))
     else {
         return None;
     };
-    let at = |l: u32| uv.get(l as usize).copied();
+    let at = |l: PanelVertex| uv.get(l).copied();
     // the bridge x → y runs along the sew line: inverted if it points back
     let (x, y) = if (i + 1) % n == j { (i, j) } else { (j, i) };
     let (w, z) = (rim[(x + n - 1) % n], rim[(y + 1) % n]);
@@ -161,12 +164,16 @@ pub fn dart_opening(rim: &[u32], uv: &[DVec2], dart: &DartLegs) -> Option<f64> {
 }
 
 /// Strain of every vertex: the mean `|ℓ′/ℓ − 1|` over its edges (module docs, step 1).
-pub fn vertex_strain(positions: &[DVec3], triangles: &[[u32; 3]], uv: &[DVec2]) -> Vec<f64> {
-    let mut sum = vec![0.0; positions.len()];
-    let mut count = vec![0u32; positions.len()];
+pub fn vertex_strain(
+    positions: &TiSlice<PanelVertex, DVec3>,
+    triangles: &TiSlice<PanelFace, [PanelVertex; 3]>,
+    uv: &TiSlice<PanelVertex, DVec2>,
+) -> TiVec<PanelVertex, f64> {
+    let mut sum: TiVec<PanelVertex, f64> = TiVec::from(vec![0.0; positions.len()]);
+    let mut count: TiVec<PanelVertex, u32> = TiVec::from(vec![0u32; positions.len()]);
     for f in triangles {
         for k in 0..3 {
-            let (a, b) = (f[k] as usize, f[(k + 1) % 3] as usize);
+            let (a, b) = (f[k], f[(k + 1) % 3]);
             let l3 = positions[a].distance(positions[b]);
             if l3 <= 0.0 {
                 continue;
@@ -182,14 +189,14 @@ pub fn vertex_strain(positions: &[DVec3], triangles: &[[u32; 3]], uv: &[DVec2]) 
 }
 
 /// Inserts darts into `panel` where its flattening `first` strains most
-/// (module docs). Vertices whose fine id is below `n_nodes` are template
-/// nodes (never cut through, never a mouth); `min_intake` is the least
+/// (module docs). Vertices whose fine id is below `n_nodes` (the template's
+/// node count) are template nodes (never cut through, never a mouth); `min_intake` is the least
 /// opening a dart must have, in metres; `flatten` flattens a candidate panel
 /// (called from several threads at once under [`AutoDartOptions::parallel`]).
 pub fn insert_darts(
     panel: &Panel,
     first: Trial,
-    n_nodes: u32,
+    n_nodes: usize,
     min_intake: f64,
     opts: &AutoDartOptions,
     flatten: impl Fn(&Panel) -> Option<Trial> + Sync,
@@ -207,7 +214,7 @@ pub fn insert_darts(
         // a candidate that panics is skipped like one that fails: its own result, in its own
         // place, so that the others stay paired with their paths (issue #16: a panicking
         // thread's whole chunk came back empty and shifted every later result)
-        let try_one = |path: &Vec<u32>| -> Option<(Panel, Trial, f64)> {
+        let try_one = |path: &Vec<PanelVertex>| -> Option<(Panel, Trial, f64)> {
             std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
                 let mut trial_panel = panel.clone();
                 trial_panel.add_dart(&name, path).ok()?;
@@ -227,7 +234,7 @@ pub fn insert_darts(
             paths.iter().map(try_one).collect()
         };
         // the lowest p95, first in candidate order on ties (deterministic)
-        let mut winner: Option<(Panel, Trial, Vec<u32>, f64)> = None;
+        let mut winner: Option<(Panel, Trial, Vec<PanelVertex>, f64)> = None;
         for (path, result) in paths.into_iter().zip(results) {
             let Some((trial_panel, trial, intake)) = result else { continue };
             let p95 = trial.distortion.strain_p95;
@@ -242,7 +249,7 @@ pub fn insert_darts(
             intake_mm: intake * 1e3,
             strain_p95_before: before,
             strain_p95_after: trial.distortion.strain_p95,
-            apex: next.positions[path[path.len() - 1] as usize],
+            apex: next.positions[path[path.len() - 1]],
             origin: DartOrigin::Found,
         });
         panel = next;
@@ -260,7 +267,7 @@ fn acceptable(panel: &Panel, trial: &Trial, min_intake: f64) -> Option<f64> {
     }
     let rim = panel.rim();
     let uv = &trial.flat.uv;
-    let sew: Vec<DVec2> = rim.iter().map(|&l| uv[l as usize]).collect();
+    let sew: Vec<DVec2> = rim.iter().map(|&l| uv[l]).collect();
     if self_intersects(&sew) {
         return None;
     }
@@ -269,7 +276,7 @@ fn acceptable(panel: &Panel, trial: &Trial, min_intake: f64) -> Option<f64> {
         // a dart a pattern maker can draw: straight legs from its mouth to its apex inside the
         // piece (a mouth on a concave seam, the back crotch, puts them outside: a V-slit)
         let (Some(&a), Some(&apex), Some(&b)) = (d.a.first(), d.a.last(), d.b.first()) else { return None };
-        let (a, apex, b) = (uv[a as usize], uv[apex as usize], uv[b as usize]);
+        let (a, apex, b) = (uv[a], uv[apex], uv[b]);
         if segment_crosses_polygon(a, apex, &sew) || segment_crosses_polygon(apex, b, &sew) {
             return None;
         }
@@ -284,7 +291,7 @@ fn acceptable(panel: &Panel, trial: &Trial, min_intake: f64) -> Option<f64> {
 
 /// Dijkstra queue entry: distance, vertex (smallest first).
 #[derive(PartialEq)]
-struct Entry(f64, u32);
+struct Entry(f64, PanelVertex);
 
 impl Eq for Entry {}
 
@@ -302,28 +309,34 @@ impl Ord for Entry {
 
 /// The paths of one round (module docs, step 2): each from an outline
 /// vertex that may open to an apex, as local ids.
-fn candidate_paths(panel: &Panel, uv: &[DVec2], n_nodes: u32, opts: &AutoDartOptions) -> Vec<Vec<u32>> {
+fn candidate_paths(
+    panel: &Panel,
+    uv: &TiSlice<PanelVertex, DVec2>,
+    n_nodes: usize,
+    opts: &AutoDartOptions,
+) -> Vec<Vec<PanelVertex>> {
     // a template node on the panel being searched (dart copies included)
-    let is_node = |v: u32| panel.global.get(v as usize).is_some_and(|&g| g < n_nodes);
+    let is_node = |v: PanelVertex| panel.global.get(v).is_some_and(|&g| vertex_node(g, n_nodes).is_some());
     let n = panel.positions.len();
-    let mut adjacency: Vec<Vec<u32>> = vec![Vec::new(); n];
+    let mut adjacency: TiVec<PanelVertex, Vec<PanelVertex>> = TiVec::from(vec![Vec::new(); n]);
     for f in &panel.triangles {
         for k in 0..3 {
             let (a, b) = (f[k], f[(k + 1) % 3]);
-            adjacency[a as usize].push(b);
-            adjacency[b as usize].push(a);
+            adjacency[a].push(b);
+            adjacency[b].push(a);
         }
     }
     for list in &mut adjacency {
         list.sort_unstable();
         list.dedup();
     }
-    let on_outline: HashSet<u32> = panel.outline.iter().copied().collect();
-    let on_dart: HashSet<u32> = panel.darts.iter().flat_map(|d| d.a.iter().chain(&d.b).copied()).collect();
+    let on_outline: HashSet<PanelVertex> = panel.outline.iter().copied().collect();
+    let on_dart: HashSet<PanelVertex> = panel.darts.iter().flat_map(|d| d.a.iter().chain(&d.b).copied()).collect();
     let strain = vertex_strain(&panel.positions, &panel.triangles, uv);
-    let mut order: Vec<u32> = (0..n as u32).filter(|v| !on_outline.contains(v) && !is_node(*v)).collect();
-    order.sort_by(|&a, &b| strain[b as usize].total_cmp(&strain[a as usize]).then(a.cmp(&b)));
-    let mut taken: HashSet<u32> = HashSet::new();
+    let mut order: Vec<PanelVertex> =
+        panel.positions.keys().filter(|v| !on_outline.contains(v) && !is_node(*v)).collect();
+    order.sort_by(|&a, &b| strain[b].total_cmp(&strain[a]).then(a.cmp(&b)));
+    let mut taken: HashSet<PanelVertex> = HashSet::new();
     let mut paths = Vec::new();
     for apex in order {
         if paths.len() >= opts.candidates {
@@ -337,7 +350,7 @@ fn candidate_paths(panel: &Panel, uv: &[DVec2], n_nodes: u32, opts: &AutoDartOpt
         };
         for &v in &path {
             taken.insert(v);
-            taken.extend(adjacency[v as usize].iter().copied());
+            taken.extend(adjacency[v].iter().copied());
         }
         if path.len() >= 3 && path_length(panel, &path) * 1e3 >= opts.min_length_mm {
             paths.push(path);
@@ -347,8 +360,8 @@ fn candidate_paths(panel: &Panel, uv: &[DVec2], n_nodes: u32, opts: &AutoDartOpt
 }
 
 /// 3D length of a path of local vertex ids, metres.
-fn path_length(panel: &Panel, path: &[u32]) -> f64 {
-    let points: Vec<DVec3> = path.iter().map(|&v| panel.positions[v as usize]).collect();
+fn path_length(panel: &Panel, path: &[PanelVertex]) -> f64 {
+    let points: Vec<DVec3> = path.iter().map(|&v| panel.positions[v]).collect();
     polyline_length_3d(&points)
 }
 
@@ -356,19 +369,19 @@ fn path_length(panel: &Panel, path: &[u32]) -> f64 {
 /// through interior vertices that are not template nodes; mouth first.
 fn shortest_to_outline(
     panel: &Panel,
-    adjacency: &[Vec<u32>],
-    apex: u32,
-    on_outline: &HashSet<u32>,
-    on_dart: &HashSet<u32>,
-    is_node: &impl Fn(u32) -> bool,
-) -> Option<Vec<u32>> {
+    adjacency: &TiSlice<PanelVertex, Vec<PanelVertex>>,
+    apex: PanelVertex,
+    on_outline: &HashSet<PanelVertex>,
+    on_dart: &HashSet<PanelVertex>,
+    is_node: &impl Fn(PanelVertex) -> bool,
+) -> Option<Vec<PanelVertex>> {
     let n = adjacency.len();
-    let mut dist = vec![f64::INFINITY; n];
-    let mut prev = vec![u32::MAX; n];
-    dist[apex as usize] = 0.0;
+    let mut dist: TiVec<PanelVertex, f64> = TiVec::from(vec![f64::INFINITY; n]);
+    let mut prev: TiVec<PanelVertex, PanelVertex> = TiVec::from(vec![apex; n]);
+    dist[apex] = 0.0;
     let mut heap = BinaryHeap::from([Entry(0.0, apex)]);
     while let Some(Entry(d, u)) = heap.pop() {
-        if d > dist[u as usize] {
+        if d > dist[u] {
             continue;
         }
         if on_outline.contains(&u) {
@@ -377,18 +390,18 @@ fn shortest_to_outline(
                 if last == apex {
                     break;
                 }
-                path.push(prev[last as usize]);
+                path.push(prev[last]);
             }
             return Some(path);
         }
-        for &v in &adjacency[u as usize] {
+        for &v in &adjacency[u] {
             if is_node(v) || on_dart.contains(&v) {
                 continue;
             }
-            let nd = d + panel.positions[u as usize].distance(panel.positions[v as usize]);
-            if nd < dist[v as usize] {
-                dist[v as usize] = nd;
-                prev[v as usize] = u;
+            let nd = d + panel.positions[u].distance(panel.positions[v]);
+            if nd < dist[v] {
+                dist[v] = nd;
+                prev[v] = u;
                 heap.push(Entry(nd, v));
             }
         }
@@ -399,19 +412,30 @@ fn shortest_to_outline(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pattern::flatten::shapes::{cap, cylinder, saddle};
+    use crate::geom::mesh::VertexId;
+    use crate::pattern::flatten::shapes::{cap, cylinder, faces, saddle};
     use crate::pattern::flatten::{distortion, flatten_with_seams, FlattenOptions};
     use crate::pattern::panels::disc_outline;
 
     fn panel((positions, triangles): (Vec<DVec3>, Vec<[u32; 3]>)) -> Panel {
         let n = positions.len();
-        let global: Vec<u32> = (0..n as u32).collect();
+        let global: TiVec<PanelVertex, VertexId> = (0..n).map(VertexId::from).collect();
+        let triangles = faces(&triangles);
         let outline = disc_outline(&triangles, &global).expect("a disc");
-        Panel { name: "p".into(), index: 0, global, unique: n, darts: vec![], positions, triangles, outline }
+        Panel {
+            name: "p".into(),
+            index: 0,
+            global,
+            unique: n,
+            darts: vec![],
+            positions: positions.into(),
+            triangles,
+            outline,
+        }
     }
 
     fn flat(p: &Panel) -> Option<Trial> {
-        let legs: Vec<Vec<u32>> = p.darts.iter().flat_map(|d| [d.a.clone(), d.b.clone()]).collect();
+        let legs: Vec<Vec<PanelVertex>> = p.darts.iter().flat_map(|d| [d.a.clone(), d.b.clone()]).collect();
         let flat = flatten_with_seams(&p.positions, &p.triangles, &legs, &FlattenOptions::default()).ok()?;
         Some(Trial { distortion: distortion(&p.positions, &p.triangles, &flat.uv), flat })
     }
@@ -447,8 +471,8 @@ mod tests {
             // every dart opens, its legs are sewn to equal length, and it was reported so
             let opening = dart_opening(&rim, &best.flat.uv, d).unwrap();
             assert!(opening >= 3e-3, "{}: {opening}", d.name);
-            let leg = |ids: &[u32]| -> f64 {
-                ids.windows(2).map(|w| best.flat.uv[w[0] as usize].distance(best.flat.uv[w[1] as usize])).sum()
+            let leg = |ids: &[PanelVertex]| -> f64 {
+                ids.windows(2).map(|w| best.flat.uv[w[0]].distance(best.flat.uv[w[1]])).sum()
             };
             assert!((leg(&d.a) - leg(&d.b)).abs() < 1e-6, "{}", d.name);
             assert!(f.intake_mm >= 3.0 && f.length_mm >= 20.0, "{f:?}");
@@ -466,7 +490,7 @@ mod tests {
         // newest apex has an even id panic in one run and fail (`None`) in the other; the
         // searches must agree, side by side on the pool
         let p = panel(cap(0.3, 30.0, 24));
-        let even_apex = |q: &Panel| q.darts.last().and_then(|d| d.a.last()).is_some_and(|v| v % 2 == 0);
+        let even_apex = |q: &Panel| q.darts.last().and_then(|d| d.a.last()).is_some_and(|v| v.0 % 2 == 0);
         let opts = AutoDartOptions { parallel: true, ..AutoDartOptions::default() };
         let failing =
             insert_darts(&p, flat(&p).unwrap(), 0, 3e-3, &opts, |q: &Panel| if even_apex(q) { None } else { flat(q) });
@@ -495,7 +519,7 @@ mod tests {
         let p = panel(cap(0.3, 30.0, 24));
         let first = flat(&p).unwrap();
         // every vertex a template node: no path exists
-        let (_, _, found) = insert_darts(&p, first.clone(), u32::MAX, 3e-3, &AutoDartOptions::default(), flat);
+        let (_, _, found) = insert_darts(&p, first.clone(), usize::MAX, 3e-3, &AutoDartOptions::default(), flat);
         assert!(found.is_empty());
         let off = AutoDartOptions { enabled: false, ..AutoDartOptions::default() };
         let (out, _, found) = insert_darts(&p, first, 0, 3e-3, &off, flat);
@@ -512,7 +536,7 @@ mod tests {
         let mouth = path[0];
         let k = p.outline.iter().position(|&v| v == mouth).unwrap();
         let n = p.outline.len();
-        let seam: Vec<u32> = (0..5).map(|i| p.outline[(k + n - 2 + i) % n]).collect();
+        let seam: Vec<VertexId> = (0..5).map(|i| p.global[p.outline[(k + n - 2 + i) % n]]).collect();
         assert_eq!(p.seam_runs(&seam).unwrap().len(), 1);
         p.add_dart("d", &path).unwrap();
         let runs = p.seam_runs(&seam).unwrap();

@@ -31,6 +31,9 @@
 
 use glam::{DMat2, DVec2, DVec3};
 use serde::{Deserialize, Serialize};
+use typed_index_collections::TiSlice;
+
+use super::panels::{PanelFace, PanelVertex};
 
 /// Thread strain and weave shear of a piece ([`fabric_strain`]).
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize, utoipa::ToSchema)]
@@ -58,15 +61,20 @@ const PERCENTILE: f64 = 0.95;
 /// Thread strain and weave shear of the piece (module docs): `positions`
 /// in 3D and `uv` in the plane in one unit, `grain` the warp's direction in
 /// the plane (any length).
-pub fn fabric_strain(positions: &[DVec3], triangles: &[[u32; 3]], uv: &[DVec2], grain: DVec2) -> FabricStrain {
+pub fn fabric_strain(
+    positions: &TiSlice<PanelVertex, DVec3>,
+    triangles: &TiSlice<PanelFace, [PanelVertex; 3]>,
+    uv: &TiSlice<PanelVertex, DVec2>,
+    grain: DVec2,
+) -> FabricStrain {
     let Some(g) = grain.try_normalize() else {
         return FabricStrain::default();
     };
     let weft = g.perp();
     let mut rows: Vec<Row> = Vec::with_capacity(triangles.len());
     for t in triangles {
-        let idx = t.map(|i| i as usize);
-        if idx.iter().any(|&i| i >= positions.len() || i >= uv.len()) {
+        let idx = *t;
+        if idx.iter().any(|&i| i.idx() >= positions.len() || i.idx() >= uv.len()) {
             continue;
         }
         let (p, q) = (idx.map(|i| positions[i]), idx.map(|i| uv[i]));
@@ -125,6 +133,12 @@ pub fn fabric_strain(positions: &[DVec3], triangles: &[[u32; 3]], uv: &[DVec2], 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::pattern::flatten::shapes::{faces, vertices};
+
+    /// [`super::fabric_strain`] of plain test arrays (`u32` ids).
+    fn fabric_strain(p: &[DVec3], t: &[[u32; 3]], uv: &[DVec2], grain: DVec2) -> FabricStrain {
+        super::fabric_strain(vertices(p), &faces(t), vertices(uv), grain)
+    }
 
     /// A 4 × 4 grid of unit squares, each split into two triangles.
     fn grid() -> (Vec<DVec3>, Vec<[u32; 3]>) {
@@ -177,7 +191,7 @@ mod tests {
         assert!((f.shear_p95_deg - 0.1f64.atan().to_degrees()).abs() < 1e-9, "{f:?}");
         assert!(f.weft_p95 < 1e-12, "{f:?}");
         // …while its diagonal mesh edges are strained by ≈ 5 %
-        let d = crate::pattern::flatten::distortion(&p, &t, &sheared);
+        let d = crate::pattern::flatten::distortion(vertices(&p), &faces(&t), vertices(&sheared));
         assert!(d.strain_max > 0.04, "{d:?}");
     }
 

@@ -142,9 +142,12 @@ use faer::{c64, Conj, MatMut, Par, Side};
 use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
+use typed_index_collections::{TiSlice, TiVec};
+
 use crate::geom::topology::{
     check_edge_uses, check_vertex_fans, triangle_edge_uses, MeshEdge, TopologyError, UnionFind,
 };
+use crate::pattern::panels::{PanelFace, PanelVertex};
 
 /// Knobs of [`flatten`].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -240,8 +243,8 @@ impl Default for FlattenOptions {
     }
 }
 
-/// Why a panel could not be flattened. Vertex and triangle numbers are
-/// indices into the caller's arrays.
+/// Why a panel could not be flattened. Vertex and triangle ids are the
+/// panel's.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum FlattenError {
     /// No triangles.
@@ -251,31 +254,31 @@ pub enum FlattenError {
     #[error("vertex {vertex} has a non-finite coordinate")]
     NonFinite {
         /// The vertex.
-        vertex: u32,
+        vertex: PanelVertex,
     },
     /// A triangle refers to a vertex beyond the vertex array.
     #[error("triangle {face} refers to vertex {index}, beyond the vertex array")]
     IndexOutOfRange {
         /// The triangle.
-        face: u32,
+        face: PanelFace,
         /// The index it holds.
-        index: u32,
+        index: PanelVertex,
     },
     /// A triangle repeats a vertex or has (relatively) no area.
     #[error("triangle {face} is degenerate")]
     DegenerateTriangle {
         /// The triangle.
-        face: u32,
+        face: PanelFace,
     },
-    /// Not an oriented manifold (input vertex ids): an edge of three or more
-    /// triangles, one run twice in the same direction, or a "bow tie" vertex.
+    /// Not an oriented manifold: an edge of three or more triangles, one run
+    /// twice in the same direction, or a "bow tie" vertex.
     #[error(transparent)]
-    Topology(#[from] TopologyError<MeshEdge>),
+    Topology(#[from] TopologyError<MeshEdge<PanelVertex>, PanelVertex>),
     /// The triangles form more than one connected piece.
     #[error("vertex {vertex} is not connected to the piece of the first triangle")]
     Disconnected {
         /// A vertex outside the first piece.
-        vertex: u32,
+        vertex: PanelVertex,
     },
     /// The panel is not a topological disc.
     #[error("the panel is not a disc: {boundary_loops} boundary loops, Euler characteristic {euler}")]
@@ -289,17 +292,17 @@ pub enum FlattenError {
     #[error("seam chain {seam} names vertex {vertex}, which is in no triangle")]
     SeamVertex {
         /// The chain (index into the caller's list).
-        seam: u32,
+        seam: usize,
         /// The vertex.
-        vertex: u32,
+        vertex: PanelVertex,
     },
     /// A sewn-length ratio ([`flatten_with_sewn_lengths`]) is not finite and positive.
     #[error("seam chain {seam}, edge {edge}: sewn-length ratio {ratio} is not finite and positive")]
     SewnRatio {
         /// The chain (index into the caller's list).
-        seam: u32,
+        seam: usize,
         /// The edge of the chain.
-        edge: u32,
+        edge: usize,
         /// The ratio given.
         ratio: f64,
     },
@@ -320,7 +323,7 @@ pub enum FlattenError {
 pub struct Flattening {
     /// Plane position of every input vertex, in the input unit (`(0, 0)` for
     /// vertices in no triangle).
-    pub uv: Vec<DVec2>,
+    pub uv: TiVec<PanelVertex, DVec2>,
     /// ARAP iterations (global solves) done.
     pub iterations: usize,
     /// Whether ARAP met its stopping criterion before `max_iterations`.
@@ -328,8 +331,8 @@ pub struct Flattening {
     /// ARAP energy `½ Σ_t Σ c |Δu − R Δx|² = Σ_t A_t ‖J_t − R_t‖²_F` of the
     /// ARAP map (input unit²; springs excluded).
     pub energy: f64,
-    /// The two vertices LSCM pinned (input numbering).
-    pub lscm_pins: [u32; 2],
+    /// The two vertices LSCM pinned.
+    pub lscm_pins: [PanelVertex; 2],
     /// Largest relative length error `|ℓ′/ℓ − 1|` of a boundary edge in `uv`
     /// (dimensionless); bounds the relative length error of every boundary
     /// chain.
@@ -384,11 +387,14 @@ const STRAIN_PERCENTILE: f64 = 0.95;
 /// # Errors
 /// [`FlattenError`] for input that is not a valid disc (default
 /// [`FlattenOptions::degenerate_area`]), or a failed factorisation.
-pub fn lscm(positions: &[DVec3], triangles: &[[u32; 3]]) -> Result<Vec<DVec2>, FlattenError> {
+pub fn lscm(
+    positions: &TiSlice<PanelVertex, DVec3>,
+    triangles: &TiSlice<PanelFace, [PanelVertex; 3]>,
+) -> Result<TiVec<PanelVertex, DVec2>, FlattenError> {
     let o = FlattenOptions::default();
     let mesh = Mesh::new(positions, triangles, o.degenerate_area)?;
     let (uv, _) = mesh.lscm(&Sparse::new(&mesh)?, o.pin_tie, o.pin_search_limit)?;
-    Ok(mesh.export(&uv, positions.len()))
+    Ok(mesh.export(&uv))
 }
 
 /// Flattens the panel: LSCM, then ARAP with every boundary edge held at its
@@ -396,7 +402,11 @@ pub fn lscm(positions: &[DVec3], triangles: &[[u32; 3]]) -> Result<Vec<DVec2>, F
 ///
 /// # Errors
 /// [`FlattenError`]: invalid options or input, or a failed factorisation.
-pub fn flatten(positions: &[DVec3], triangles: &[[u32; 3]], opts: &FlattenOptions) -> Result<Flattening, FlattenError> {
+pub fn flatten(
+    positions: &TiSlice<PanelVertex, DVec3>,
+    triangles: &TiSlice<PanelFace, [PanelVertex; 3]>,
+    opts: &FlattenOptions,
+) -> Result<Flattening, FlattenError> {
     flatten_with_seams(positions, triangles, &[], opts)
 }
 
@@ -414,9 +424,9 @@ pub fn flatten(positions: &[DVec3], triangles: &[[u32; 3]], opts: &FlattenOption
 /// vertex array or in no triangle ([`FlattenError::SeamVertex`]), or a failed
 /// factorisation.
 pub fn flatten_with_seams(
-    positions: &[DVec3],
-    triangles: &[[u32; 3]],
-    seams: &[Vec<u32>],
+    positions: &TiSlice<PanelVertex, DVec3>,
+    triangles: &TiSlice<PanelFace, [PanelVertex; 3]>,
+    seams: &[Vec<PanelVertex>],
     opts: &FlattenOptions,
 ) -> Result<Flattening, FlattenError> {
     flatten_with_sewn_lengths(positions, triangles, seams, &[], opts)
@@ -431,9 +441,9 @@ pub fn flatten_with_seams(
 /// # Errors
 /// As [`flatten_with_seams`]; also [`FlattenError::SewnRatio`].
 pub fn flatten_with_sewn_lengths(
-    positions: &[DVec3],
-    triangles: &[[u32; 3]],
-    seams: &[Vec<u32>],
+    positions: &TiSlice<PanelVertex, DVec3>,
+    triangles: &TiSlice<PanelFace, [PanelVertex; 3]>,
+    seams: &[Vec<PanelVertex>],
     sewn: &[Vec<f64>],
     opts: &FlattenOptions,
 ) -> Result<Flattening, FlattenError> {
@@ -441,14 +451,14 @@ pub fn flatten_with_sewn_lengths(
     let mut mesh = Mesh::new(positions, triangles, opts.degenerate_area)?;
     let mut chain_edges = Vec::new();
     for (k, chain) in seams.iter().enumerate() {
-        let local = |v: u32| match mesh.compact.get(v as usize) {
+        let local = |v: PanelVertex| match mesh.compact.get(v) {
             Some(&c) if c != u32::MAX => Ok(c),
-            _ => Err(FlattenError::SeamVertex { seam: k as u32, vertex: v }),
+            _ => Err(FlattenError::SeamVertex { seam: k, vertex: v }),
         };
         for (i, pair) in chain.windows(2).enumerate() {
             let ratio = sewn.get(k).and_then(|r| r.get(i)).copied().unwrap_or(1.0);
             if !(ratio.is_finite() && ratio > 0.0) {
-                return Err(FlattenError::SewnRatio { seam: k as u32, edge: i as u32, ratio });
+                return Err(FlattenError::SewnRatio { seam: k, edge: i, ratio });
             }
             chain_edges.push((edge_key(local(pair[0])?, local(pair[1])?), ratio));
         }
@@ -500,7 +510,7 @@ pub fn flatten_with_sewn_lengths(
         .map(|((e, l), _)| (uv[e[1] as usize].distance(uv[e[0] as usize]) / l - 1.0).abs())
         .fold(0.0, f64::max);
     Ok(Flattening {
-        uv: mesh.export(&uv, positions.len()),
+        uv: mesh.export(&uv),
         iterations: arap.iterations,
         converged: arap.converged,
         energy: arap.energy / (mesh.scale * mesh.scale),
@@ -515,15 +525,19 @@ pub fn flatten_with_sewn_lengths(
 /// Distortion figures of `uv` against the 3D panel ([`Distortion`]).
 /// Triangles with an index beyond `positions` or `uv` are skipped, so are
 /// zero-length edges for the strain; never panics.
-pub fn distortion(positions: &[DVec3], triangles: &[[u32; 3]], uv: &[DVec2]) -> Distortion {
+pub fn distortion(
+    positions: &TiSlice<PanelVertex, DVec3>,
+    triangles: &TiSlice<PanelFace, [PanelVertex; 3]>,
+    uv: &TiSlice<PanelVertex, DVec2>,
+) -> Distortion {
     let n = positions.len().min(uv.len());
-    let valid: Vec<[u32; 3]> = triangles.iter().filter(|t| t.iter().all(|&i| (i as usize) < n)).copied().collect();
+    let valid: Vec<[PanelVertex; 3]> = triangles.iter().filter(|t| t.iter().all(|i| i.idx() < n)).copied().collect();
     let (mut a3, mut a2, mut total) = (0.0, 0.0, 0.0);
     let mut signed = Vec::with_capacity(valid.len());
     for t in &valid {
-        let [a, b, c] = t.map(|i| positions[i as usize]);
+        let [a, b, c] = t.map(|i| positions[i]);
         a3 += 0.5 * (b - a).cross(c - a).length();
-        let s = signed_area(t.map(|i| uv[i as usize]));
+        let s = signed_area(t.map(|i| uv[i]));
         a2 += s.abs();
         total += s;
         signed.push(s);
@@ -534,15 +548,16 @@ pub fn distortion(positions: &[DVec3], triangles: &[[u32; 3]], uv: &[DVec2]) -> 
         .iter()
         .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
         .filter(|(i, j)| i != j)
-        .map(|(i, j)| edge_key(i, j))
+        .map(|(i, j)| edge_key(i.0, j.0))
         .collect();
     keys.sort_unstable();
     let (mut l3, mut l2, mut b3, mut b2, mut bmax) = (0.0, 0.0, 0.0, 0.0, 0.0f64);
     let mut strains = Vec::with_capacity(keys.len() / 2 + 1);
     for group in keys.chunk_by(|a, b| a == b) {
         let (i, j) = split_key(group[0]);
-        let d3 = positions[i as usize].distance(positions[j as usize]);
-        let d2 = uv[i as usize].distance(uv[j as usize]);
+        let (i, j) = (PanelVertex(i), PanelVertex(j));
+        let d3 = positions[i].distance(positions[j]);
+        let d2 = uv[i].distance(uv[j]);
         l3 += d3;
         l2 += d2;
         let strain = if d3 > 0.0 { Some((d2 / d3 - 1.0).abs()) } else { None };
@@ -605,12 +620,13 @@ fn split_key(k: u64) -> (u32, u32) {
 }
 
 /// The checked panel in compact numbering (referenced vertices only) and
-/// rescaled coordinates.
+/// rescaled coordinates. The compact numbering is the solver's (rows of its
+/// sparse systems), hence plain `u32`; the panel's ids are typed.
 struct Mesh {
     /// Compact → input vertex.
-    verts: Vec<u32>,
+    verts: Vec<PanelVertex>,
     /// Input → compact vertex (`u32::MAX`: in no triangle).
-    compact: Vec<u32>,
+    compact: TiVec<PanelVertex, u32>,
     /// Triangles, compact numbering.
     tris: Vec<[u32; 3]>,
     /// Per triangle, edge `k` (corner `k` → corner `k+1`) laid out in its plane.
@@ -632,33 +648,37 @@ struct Mesh {
 }
 
 impl Mesh {
-    fn new(positions: &[DVec3], triangles: &[[u32; 3]], degenerate_area: f64) -> Result<Self, FlattenError> {
+    fn new(
+        positions: &TiSlice<PanelVertex, DVec3>,
+        triangles: &TiSlice<PanelFace, [PanelVertex; 3]>,
+        degenerate_area: f64,
+    ) -> Result<Self, FlattenError> {
         if triangles.is_empty() {
             return Err(FlattenError::Empty);
         }
-        if let Some(v) = positions.iter().position(|p| !p.is_finite()) {
-            return Err(FlattenError::NonFinite { vertex: v as u32 });
+        if let Some(v) = positions.position(|p| !p.is_finite()) {
+            return Err(FlattenError::NonFinite { vertex: v });
         }
-        let mut compact = vec![u32::MAX; positions.len()];
-        for (f, t) in triangles.iter().enumerate() {
+        let mut compact: TiVec<PanelVertex, u32> = TiVec::from(vec![u32::MAX; positions.len()]);
+        for (f, t) in triangles.iter_enumerated() {
             for &i in t {
-                match compact.get_mut(i as usize) {
+                match compact.get_mut(i) {
                     Some(c) => *c = 0,
-                    None => return Err(FlattenError::IndexOutOfRange { face: f as u32, index: i }),
+                    None => return Err(FlattenError::IndexOutOfRange { face: f, index: i }),
                 }
             }
             if t[0] == t[1] || t[1] == t[2] || t[2] == t[0] {
-                return Err(FlattenError::DegenerateTriangle { face: f as u32 });
+                return Err(FlattenError::DegenerateTriangle { face: f });
             }
         }
         let mut verts = Vec::new();
-        for (v, c) in compact.iter_mut().enumerate() {
+        for (v, c) in compact.iter_mut_enumerated() {
             if *c != u32::MAX {
                 *c = verts.len() as u32;
-                verts.push(v as u32);
+                verts.push(v);
             }
         }
-        let largest = verts.iter().map(|&v| positions[v as usize].abs().max_element()).fold(0.0, f64::max);
+        let largest = verts.iter().map(|&v| positions[v].abs().max_element()).fold(0.0, f64::max);
         let scale = if largest > 0.0 {
             // 2^-e with |coordinates| · 2^-e ≤ 1: exact, and far from overflow and underflow
             let e = (largest.log2().ceil() as i32).clamp(1 - f64::MAX_EXP, f64::MAX_EXP - 1);
@@ -666,8 +686,8 @@ impl Mesh {
         } else {
             1.0
         };
-        let pos: Vec<DVec3> = verts.iter().map(|&v| positions[v as usize] * scale).collect();
-        let tris: Vec<[u32; 3]> = triangles.iter().map(|t| t.map(|i| compact[i as usize])).collect();
+        let pos: Vec<DVec3> = verts.iter().map(|&v| positions[v] * scale).collect();
+        let tris: Vec<[u32; 3]> = triangles.iter().map(|t| t.map(|i| compact[i])).collect();
         let n = verts.len();
 
         let mut edges = Vec::with_capacity(tris.len());
@@ -679,7 +699,7 @@ impl Mesh {
             let twice = e1.cross(e2).length();
             let longest = e1.length_squared().max(e2.length_squared()).max((c - b).length_squared());
             if !(twice > degenerate_area * longest && twice.is_finite()) {
-                return Err(FlattenError::DegenerateTriangle { face: f as u32 });
+                return Err(FlattenError::DegenerateTriangle { face: PanelFace::from(f) });
             }
             let l = e1.length();
             let p = [DVec2::ZERO, DVec2::new(l, 0.0), DVec2::new(e1.dot(e2) / l, twice / l)];
@@ -692,10 +712,10 @@ impl Mesh {
         }
 
         // unique edges: boundary (one triangle), interior (two, opposite directions); one fan
-        // per vertex. Errors name the input's vertex ids (compact ids grow with them).
-        let input_ids = |e: TopologyError<MeshEdge>| e.map_vertices(|v| verts[v as usize]);
-        let checked = check_edge_uses(triangle_edge_uses(&tris)).map_err(input_ids)?;
-        check_vertex_fans(&tris, n, &checked).map_err(input_ids)?;
+        // per vertex. Checked in the panel's ids, which the errors name (a face and its
+        // corners are the same in both numberings).
+        let checked = check_edge_uses(triangle_edge_uses(&triangles.raw))?;
+        check_vertex_fans(&triangles.raw, positions.len(), &checked)?;
         let mut next = vec![(u32::MAX, 0); n];
         for e in checked.iter().filter(|e| e.second.is_none()) {
             let corner = 3 * e.first.face.idx() + usize::from(e.first.corner);
@@ -741,9 +761,10 @@ impl Mesh {
     }
 
     /// Input-numbered, input-unit copy of a compact map.
-    fn export(&self, uv: &[DVec2], len: usize) -> Vec<DVec2> {
-        (0..len)
-            .map(|v| match self.compact[v] {
+    fn export(&self, uv: &[DVec2]) -> TiVec<PanelVertex, DVec2> {
+        self.compact
+            .iter()
+            .map(|&c| match c {
                 u32::MAX => DVec2::ZERO,
                 c => uv[c as usize] / self.scale,
             })
@@ -1533,8 +1554,28 @@ impl Factor {
 pub(crate) mod shapes {
     use glam::{DVec2, DVec3};
 
-    /// Positions and triangles.
+    use typed_index_collections::{TiSlice, TiVec};
+
+    use crate::pattern::panels::{PanelFace, PanelVertex};
+
+    /// Positions and triangles, plain `u32` ids as the tests write them
+    /// ([`vertices`] and [`faces`] give the panel's typed ids).
     pub(crate) type Panel = (Vec<DVec3>, Vec<[u32; 3]>);
+
+    /// Test positions as a panel's per-vertex data.
+    pub(crate) fn vertices<T>(p: &[T]) -> &TiSlice<PanelVertex, T> {
+        TiSlice::from_ref(p)
+    }
+
+    /// Test triangles in a panel's typed ids.
+    pub(crate) fn faces(t: &[[u32; 3]]) -> TiVec<PanelFace, [PanelVertex; 3]> {
+        t.iter().map(|f| f.map(PanelVertex)).collect()
+    }
+
+    /// A test chain in a panel's typed ids.
+    pub(crate) fn chain(c: &[u32]) -> Vec<PanelVertex> {
+        c.iter().copied().map(PanelVertex).collect()
+    }
 
     /// A `rows × cols` grid over `(s, t) ∈ [0, 1]²` mapped by `f`, diagonals
     /// alternating; counter-clockwise in `(s, t)`.
@@ -1609,6 +1650,61 @@ mod tests {
     use super::shapes::*;
     use super::*;
     use proptest::prelude::*;
+
+    // The tests are written with plain `u32` ids and slices: these shadow the
+    // typed API with the same names, converting on the way in and out.
+
+    /// A [`Flattening`] with its map and pins as plain slices.
+    #[derive(Debug, PartialEq)]
+    struct Raw {
+        uv: Vec<DVec2>,
+        lscm_pins: [u32; 2],
+        typed: Flattening,
+    }
+
+    impl std::ops::Deref for Raw {
+        type Target = Flattening;
+        fn deref(&self) -> &Flattening {
+            &self.typed
+        }
+    }
+
+    fn raw(f: Flattening) -> Raw {
+        Raw { uv: f.uv.raw.clone(), lscm_pins: f.lscm_pins.map(|v| v.0), typed: f }
+    }
+
+    fn flatten(p: &[DVec3], t: &[[u32; 3]], o: &FlattenOptions) -> Result<Raw, FlattenError> {
+        super::flatten(vertices(p), &faces(t), o).map(raw)
+    }
+
+    fn flatten_with_seams(
+        p: &[DVec3],
+        t: &[[u32; 3]],
+        s: &[Vec<u32>],
+        o: &FlattenOptions,
+    ) -> Result<Raw, FlattenError> {
+        let s: Vec<Vec<PanelVertex>> = s.iter().map(|c| chain(c)).collect();
+        super::flatten_with_seams(vertices(p), &faces(t), &s, o).map(raw)
+    }
+
+    fn flatten_with_sewn_lengths(
+        p: &[DVec3],
+        t: &[[u32; 3]],
+        s: &[Vec<u32>],
+        sewn: &[Vec<f64>],
+        o: &FlattenOptions,
+    ) -> Result<Raw, FlattenError> {
+        let s: Vec<Vec<PanelVertex>> = s.iter().map(|c| chain(c)).collect();
+        super::flatten_with_sewn_lengths(vertices(p), &faces(t), &s, sewn, o).map(raw)
+    }
+
+    fn lscm(p: &[DVec3], t: &[[u32; 3]]) -> Result<Vec<DVec2>, FlattenError> {
+        super::lscm(vertices(p), &faces(t)).map(|uv| uv.raw)
+    }
+
+    fn distortion(p: &[DVec3], t: &[[u32; 3]], uv: &[DVec2]) -> Distortion {
+        super::distortion(vertices(p), &faces(t), vertices(uv))
+    }
 
     /// The boundary loop (vertices in order).
     fn boundary_loop(triangles: &[[u32; 3]]) -> Vec<u32> {
@@ -1811,7 +1907,7 @@ mod tests {
         assert!(some.boundary_residual < 1e-12 && some.converged && ds.flipped == 0);
         assert_eq!(
             flatten_with_seams(&p, &t, &[vec![0, 1], vec![3, 99_999]], &FlattenOptions::default()),
-            Err(FlattenError::SeamVertex { seam: 1, vertex: 99_999 })
+            Err(FlattenError::SeamVertex { seam: 1, vertex: PanelVertex(99_999) })
         );
     }
 
@@ -1823,21 +1919,25 @@ mod tests {
         assert_eq!(err(&p, &[]), FlattenError::Empty);
         let mut q = p.clone();
         q[4].y = f64::NAN;
-        assert_eq!(err(&q, &t), FlattenError::NonFinite { vertex: 4 });
+        assert_eq!(err(&q, &t), FlattenError::NonFinite { vertex: PanelVertex(4) });
         q[4] = DVec3::new(0.5, 0.5, f64::INFINITY);
-        assert_eq!(lscm(&q, &t), Err(FlattenError::NonFinite { vertex: 4 }));
+        assert_eq!(lscm(&q, &t), Err(FlattenError::NonFinite { vertex: PanelVertex(4) }));
         let mut bad = t.clone();
         bad[3][1] = 99;
-        assert_eq!(err(&p, &bad), FlattenError::IndexOutOfRange { face: 3, index: 99 });
+        assert_eq!(err(&p, &bad), FlattenError::IndexOutOfRange { face: PanelFace(3), index: PanelVertex(99) });
         let mut bad = t.clone();
         bad[5] = [4, 4, 5];
-        assert_eq!(err(&p, &bad), FlattenError::DegenerateTriangle { face: 5 });
+        assert_eq!(err(&p, &bad), FlattenError::DegenerateTriangle { face: PanelFace(5) });
         let line = [DVec3::ZERO, DVec3::X, DVec3::X * 2.0];
-        assert_eq!(err(&line, &[[0, 1, 2]]), FlattenError::DegenerateTriangle { face: 0 });
+        assert_eq!(err(&line, &[[0, 1, 2]]), FlattenError::DegenerateTriangle { face: PanelFace(0) });
         // three triangles on the edge 0–1
         let fin = [DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z, DVec3::NEG_Y];
-        let fin_edge =
-            |a, b| FlattenError::Topology(TopologyError::NonManifoldEdge { edge: MeshEdge::new(a, b), faces: 3 });
+        let fin_edge = |a, b| {
+            FlattenError::Topology(TopologyError::NonManifoldEdge {
+                edge: MeshEdge::new(PanelVertex(a), PanelVertex(b)),
+                faces: 3,
+            })
+        };
         assert_eq!(err(&fin, &[[0, 1, 2], [1, 0, 3], [1, 0, 4]]), fin_edge(0, 1));
         // named in the input's ids, not the compact numbering (vertex 0 is in no triangle)
         let sparse = [DVec3::ONE, DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z, DVec3::NEG_Y];
@@ -1847,7 +1947,7 @@ mod tests {
         assert_eq!(
             err(&sq, &[[0, 1, 2], [0, 1, 3]]),
             FlattenError::Topology(TopologyError::InconsistentOrientation {
-                edge: MeshEdge::new(0, 1),
+                edge: MeshEdge::new(PanelVertex(0), PanelVertex(1)),
                 face_a: crate::geom::mesh::FaceId(0),
                 face_b: crate::geom::mesh::FaceId(1)
             })
@@ -1856,14 +1956,11 @@ mod tests {
         let bow = [DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::NEG_X, DVec3::NEG_Y];
         assert_eq!(
             err(&bow, &[[0, 1, 2], [0, 3, 4]]),
-            FlattenError::Topology(TopologyError::NonManifoldVertex {
-                vertex: crate::geom::mesh::VertexId(0),
-                fans: 2
-            })
+            FlattenError::Topology(TopologyError::NonManifoldVertex { vertex: PanelVertex(0), fans: 2 })
         );
         // two separate triangles
         let two = [DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z, DVec3::Z + DVec3::X, DVec3::Z + DVec3::Y];
-        assert_eq!(err(&two, &[[0, 1, 2], [3, 4, 5]]), FlattenError::Disconnected { vertex: 3 });
+        assert_eq!(err(&two, &[[0, 1, 2], [3, 4, 5]]), FlattenError::Disconnected { vertex: PanelVertex(3) });
         // a closed octahedron, and an annulus (a square with a square hole)
         let oct = [DVec3::X, DVec3::NEG_X, DVec3::Y, DVec3::NEG_Y, DVec3::Z, DVec3::NEG_Z];
         let ot = [[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]];
@@ -1941,7 +2038,7 @@ mod tests {
     #[test]
     fn the_two_coordinate_solve_matches_faer() {
         let (p, t) = cap(0.5, 30.0, 12);
-        let mesh = Mesh::new(&p, &t, 1e-12).expect("valid");
+        let mesh = Mesh::new(vertices(&p), &faces(&t), 1e-12).expect("valid");
         let sparse = Sparse::new(&mesh).expect("pattern");
         let n = mesh.pos.len();
         let mut a = vec![0.0; n + 3 * mesh.tris.len()];
@@ -1973,7 +2070,7 @@ mod tests {
     #[test]
     fn untangling_unflips_without_touching_the_boundary() {
         let (p, t) = saddle();
-        let mesh = Mesh::new(&p, &t, 1e-12).expect("valid");
+        let mesh = Mesh::new(vertices(&p), &faces(&t), 1e-12).expect("valid");
         let f = flatten(&p, &t, &FlattenOptions::default()).expect("flatten");
         let mut uv: Vec<DVec2> = f.uv.iter().map(|q| *q * mesh.scale).collect();
         // fold an interior vertex over a neighbour: several flipped triangles

@@ -52,6 +52,7 @@ use std::collections::BTreeMap;
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use typed_index_collections::{TiSlice, TiVec};
 
 use super::assemble::{
     assemble, deviation_from_chord, polyline_length, polyline_length_3d, self_intersects, PieceError, PieceOptions,
@@ -61,10 +62,12 @@ use super::darts::{dart_opening, insert_darts, AutoDartOptions, DartOrigin, Foun
 use super::fabric::{fabric_strain, FabricStrain};
 use super::flatten::{distortion, flatten_with_sewn_lengths, Distortion, FlattenError, FlattenOptions, Flattening};
 use super::grade::{mirror_difference, MirrorDifference};
-use super::panels::{cut_plain, CutGarment, Panel, PanelError, SeamChain};
+use super::panels::{cut_plain, CutGarment, Panel, PanelError, PanelVertex, SeamChain};
 use super::piece::PatternPiece;
+use crate::geom::mesh::{FaceId, VertexId};
 use crate::geom::plane::Plane;
-use crate::refine::lineage::Lineage;
+use crate::geom::topology::MeshEdge;
+use crate::refine::lineage::{node_vertex, vertex_node, Lineage};
 use crate::template::format::Template;
 
 /// Knobs of the pattern stage.
@@ -203,8 +206,8 @@ pub struct PlannedDart {
     pub panel: String,
     /// Its name (`dart_auto_<panel>_<k>`).
     pub name: String,
-    /// Its line, refined-mesh vertex ids from the mouth on the outline to the apex.
-    pub chain: Vec<u32>,
+    /// Its line, refined-mesh vertices from the mouth on the outline to the apex.
+    pub chain: Vec<VertexId>,
 }
 
 /// Where the strain of a piece concentrates.
@@ -288,8 +291,8 @@ pub struct GarmentPattern {
 /// [`PatternError`].
 pub fn pattern(
     t: &Template,
-    positions: &[DVec3],
-    triangles: &[[u32; 3]],
+    positions: &TiSlice<VertexId, DVec3>,
+    triangles: &TiSlice<FaceId, [VertexId; 3]>,
     lineage: &Lineage,
     size: &str,
     opts: &PatternOptions,
@@ -311,8 +314,8 @@ pub fn pattern(
 /// not a line of this mesh's panel.
 pub fn pattern_with_plan(
     t: &Template,
-    positions: &[DVec3],
-    triangles: &[[u32; 3]],
+    positions: &TiSlice<VertexId, DVec3>,
+    triangles: &TiSlice<FaceId, [VertexId; 3]>,
     lineage: &Lineage,
     size: &str,
     opts: &PatternOptions,
@@ -374,8 +377,8 @@ fn pair_name(a: &str, b: &str) -> String {
 /// [`pattern_with_plan`] before the mirror pairs are paired: the darts.
 fn pattern_darts(
     t: &Template,
-    positions: &[DVec3],
-    triangles: &[[u32; 3]],
+    positions: &TiSlice<VertexId, DVec3>,
+    triangles: &TiSlice<FaceId, [VertexId; 3]>,
     lineage: &Lineage,
     size: &str,
     opts: &PatternOptions,
@@ -454,13 +457,13 @@ fn carry_darts(panel: &mut Panel, planned: &[PlannedDart]) -> Result<Vec<FoundDa
     let name = panel.name.clone();
     for d in planned.iter().filter(|d| d.panel == name) {
         let err = |reason: String| PatternError::CarriedDart { panel: name.clone(), dart: d.name.clone(), reason };
-        let chain: Vec<u32> = d
+        let chain: Vec<PanelVertex> = d
             .chain
             .iter()
             .map(|&g| panel.local(g).ok_or_else(|| err(format!("vertex {g} is not in the panel"))))
             .collect::<Result<_, _>>()?;
         panel.add_dart(&d.name, &chain).map_err(err)?;
-        let pts: Vec<DVec3> = chain.iter().map(|&l| panel.positions[l as usize]).collect();
+        let pts: Vec<DVec3> = chain.iter().map(|&l| panel.positions[l]).collect();
         found.push(FoundDart {
             name: d.name.clone(),
             length_mm: polyline_length_3d(&pts) * 1e3,
@@ -479,9 +482,9 @@ fn carry_darts(panel: &mut Panel, planned: &[PlannedDart]) -> Result<Vec<FoundDa
 type DartCheck = (String, f64, bool);
 
 /// Sewn-length ratio `ℓ′/ℓ` of every seam edge of every panel, keyed by the
-/// panel's index and the edge's global vertex ids `(min, max)` (module docs,
+/// panel's index and the edge of the refined mesh (module docs,
 /// *Negotiated seams*).
-type SewnRatios = BTreeMap<(usize, u32, u32), f64>;
+type SewnRatios = BTreeMap<(usize, MeshEdge), f64>;
 
 /// This panel's seams (and darts) as chains of local ids, for
 /// [`flatten_with_sewn_lengths`] to hold at their sewn lengths so both sides
@@ -490,7 +493,7 @@ type SewnRatios = BTreeMap<(usize, u32, u32), f64>;
 /// dart legs are held (plus a one-vertex chain, which holds nothing, so
 /// that the seams are free rather than all held).
 fn seam_chains(panel: &Panel, seams: &[SeamChain], sewn: &SewnRatios, hold_seams: bool) -> SeamHolds {
-    let runs: Vec<Vec<u32>> = if hold_seams {
+    let runs: Vec<Vec<PanelVertex>> = if hold_seams {
         seam_runs(panel, seams)
     } else {
         panel.outline.first().map(|&v| vec![v]).into_iter().collect()
@@ -500,8 +503,8 @@ fn seam_chains(panel: &Panel, seams: &[SeamChain], sewn: &SewnRatios, hold_seams
         .map(|run| {
             run.windows(2)
                 .map(|w| {
-                    let (a, b) = (panel.global[w[0] as usize], panel.global[w[1] as usize]);
-                    sewn.get(&(panel.index, a.min(b), a.max(b))).copied().unwrap_or(1.0)
+                    let edge = MeshEdge::new(panel.global[w[0]], panel.global[w[1]]);
+                    sewn.get(&(panel.index, edge)).copied().unwrap_or(1.0)
                 })
                 .collect()
         })
@@ -512,7 +515,7 @@ fn seam_chains(panel: &Panel, seams: &[SeamChain], sewn: &SewnRatios, hold_seams
 
 /// The runs of `panel`'s outline along its seams (local ids; a seam through
 /// a dart mouth runs in two pieces).
-fn seam_runs(panel: &Panel, seams: &[SeamChain]) -> Vec<Vec<u32>> {
+fn seam_runs(panel: &Panel, seams: &[SeamChain]) -> Vec<Vec<PanelVertex>> {
     seams
         .iter()
         .filter(|s| s.panel_a == panel.index || s.panel_b == panel.index)
@@ -524,7 +527,7 @@ fn seam_runs(panel: &Panel, seams: &[SeamChain]) -> Vec<Vec<u32>> {
 /// Chains of local ids a panel's flattening holds, and the sewn-length
 /// ratios of the first ones' edges ([`flatten_with_sewn_lengths`]).
 struct SeamHolds {
-    chains: Vec<Vec<u32>>,
+    chains: Vec<Vec<PanelVertex>>,
     ratios: Vec<Vec<f64>>,
 }
 
@@ -543,7 +546,7 @@ fn flatten_error(panel: &Panel) -> impl FnOnce(FlattenError) -> PatternError {
 /// seams free; along each seam, between consecutive template nodes (where
 /// notches sit), both sides are held at the mean of the lengths they took,
 /// each edge scaled from its own free length.
-fn negotiate(panels: &[Panel], free: &[Trial], seams: &[SeamChain], n_nodes: u32, power: f64) -> SewnRatios {
+fn negotiate(panels: &[Panel], free: &[Trial], seams: &[SeamChain], n_nodes: usize, power: f64) -> SewnRatios {
     // a side without strain has no say of its own (nor does any side when none strains)
     let say: Vec<f64> =
         free.iter().map(|f| if power == 0.0 { 1.0 } else { f.distortion.strain_p95.max(0.0).powf(power) }).collect();
@@ -564,7 +567,6 @@ fn negotiate(panels: &[Panel], free: &[Trial], seams: &[SeamChain], n_nodes: u32
                 edges
                     .iter()
                     .map(|&[u, w]| {
-                        let (u, w) = (u as usize, w as usize);
                         let l3 = panels[p].positions[u].distance(panels[p].positions[w]);
                         let l2 = flats[p].uv[u].distance(flats[p].uv[w]);
                         (l3, if l2 > 0.0 { l2 } else { l3 })
@@ -574,7 +576,7 @@ fn negotiate(panels: &[Panel], free: &[Trial], seams: &[SeamChain], n_nodes: u32
             .collect();
         let mut start = 0;
         for end in 1..s.chain.len() {
-            if s.chain[end] >= n_nodes && end + 1 < s.chain.len() {
+            if vertex_node(s.chain[end], n_nodes).is_none() && end + 1 < s.chain.len() {
                 continue;
             }
             let free: Vec<f64> = lengths.iter().map(|l| l[start..end].iter().map(|e| e.1).sum()).collect();
@@ -587,8 +589,8 @@ fn negotiate(panels: &[Panel], free: &[Trial], seams: &[SeamChain], n_nodes: u32
                 for k in start..end {
                     let (l3, l2) = l[k];
                     if l3 > 0.0 && *f > 0.0 {
-                        let [u, w] = edges[k].map(|v| panels[p].global[v as usize]);
-                        sewn.insert((p, u.min(w), u.max(w)), l2 * held / f / l3);
+                        let [u, w] = edges[k].map(|v| panels[p].global[v]);
+                        sewn.insert((p, MeshEdge::new(u, w)), l2 * held / f / l3);
                     }
                 }
             }
@@ -620,7 +622,7 @@ fn flatten_free(panel: &Panel, seams: &[SeamChain], opts: &FlattenOptions) -> Re
 /// whose cap did not change are reused).
 fn pattern_once(
     t: &Template,
-    positions: &[DVec3],
+    positions: &TiSlice<VertexId, DVec3>,
     plain: &CutGarment,
     lineage: &Lineage,
     size: &str,
@@ -630,7 +632,7 @@ fn pattern_once(
     let find_darts = matches!(search, Search::Find);
     let cut_panels = plain.darted(t, positions, lineage)?;
     let seams = &plain.seams;
-    let n_nodes = t.nodes.len() as u32;
+    let n_nodes = t.nodes.len();
     // darts where a piece strains, searched with the seams free when they are negotiated afterwards;
     // per panel at most `cap` of them, lowered when the negotiated flattening of the darted panel
     // folds or crosses its sew line (the search saw the free one)
@@ -708,7 +710,7 @@ fn pattern_once(
                         Some(PlannedDart {
                             panel: panel.name.clone(),
                             name: f.name.clone(),
-                            chain: legs.a.iter().map(|&l| panel.global[l as usize]).collect(),
+                            chain: legs.a.iter().map(|&l| panel.global[l]).collect(),
                         })
                     })
                 })
@@ -747,7 +749,7 @@ struct PassDarts {
 #[expect(clippy::too_many_arguments, reason = "one step of a pass: its inputs and the pass's search state")]
 fn pass_darts(
     t: &Template,
-    positions: &[DVec3],
+    positions: &TiSlice<VertexId, DVec3>,
     cut_panels: &[Panel],
     seams: &[SeamChain],
     opts: &PatternOptions,
@@ -757,7 +759,7 @@ fn pass_darts(
     second_of: &[Option<usize>],
 ) -> Result<PassDarts, PatternError> {
     let find_darts = matches!(search, Search::Find);
-    let n_nodes = t.nodes.len() as u32;
+    let n_nodes = t.nodes.len();
     let mut panels = cut_panels.to_vec();
     let mut found_darts = vec![Vec::new(); panels.len()];
     // with negotiated seams, the search's last flattening is the free one the negotiation needs
@@ -828,7 +830,7 @@ fn sewn_lengths(
     panels: &[Panel],
     free: Vec<Option<Trial>>,
     seams: &[SeamChain],
-    n_nodes: u32,
+    n_nodes: usize,
     opts: &PatternOptions,
     find_darts: bool,
 ) -> Result<SewnRatios, PatternError> {
@@ -867,7 +869,7 @@ fn piece_report(
         .triangles
         .iter()
         .map(|f| {
-            let [a, b, c] = f.map(|v| panel.positions[v as usize]);
+            let [a, b, c] = f.map(|v| panel.positions[v]);
             0.5 * (b - a).cross(c - a).length()
         })
         .sum::<f64>()
@@ -877,7 +879,7 @@ fn piece_report(
         size: size.to_string(),
         distortion: d,
         fabric: fabric_strain(
-            &panel.positions.iter().map(|q| *q * 1e3).collect::<Vec<_>>(),
+            &panel.positions.iter().map(|q| *q * 1e3).collect::<TiVec<_, _>>(),
             &panel.triangles,
             &p.uv_mm,
             DVec2::NEG_Y,
@@ -899,7 +901,7 @@ fn piece_report(
 /// node pairs tied to mirrored feature points (`thigh_left`/`thigh_right`;
 /// each point tied to one node), through the mean of their midpoints.
 /// `None` without such pairs.
-fn mirror_plane(t: &Template, positions: &[DVec3]) -> Option<(DVec3, f64)> {
+fn mirror_plane(t: &Template, positions: &TiSlice<VertexId, DVec3>) -> Option<(DVec3, f64)> {
     let names: Vec<String> = t.nodes.iter().map(|n| n.point.to_string()).collect();
     let unique = |name: &str| -> Option<usize> {
         let mut it = names.iter().enumerate().filter(|(_, n)| n.as_str() == name);
@@ -912,7 +914,7 @@ fn mirror_plane(t: &Template, positions: &[DVec3]) -> Option<(DVec3, f64)> {
             continue;
         }
         if let Some(j) = mirror_name(name).and_then(|m| unique(&m)) {
-            pairs.push((*positions.get(i)?, *positions.get(j)?));
+            pairs.push((*positions.get(node_vertex(i as u32))?, *positions.get(node_vertex(j as u32))?));
         }
     }
     Plane::bisecting(&pairs, None).map(|p| (p.normal, p.offset))
@@ -928,7 +930,7 @@ fn mirror_darts(
     first: &Panel,
     darts: &[FoundDart],
     second: &mut Panel,
-    positions: &[DVec3],
+    positions: &TiSlice<VertexId, DVec3>,
     (n, d): (DVec3, f64),
     opts: &PatternOptions,
 ) -> Option<Vec<FoundDart>> {
@@ -937,8 +939,7 @@ fn mirror_darts(
     let mut edges = std::collections::HashSet::new();
     for f in &second.triangles {
         for k in 0..3 {
-            let (a, b) = (f[k], f[(k + 1) % 3]);
-            edges.insert((a.min(b), a.max(b)));
+            edges.insert(MeshEdge::new(f[k], f[(k + 1) % 3]));
         }
     }
     let mut trial = second.clone();
@@ -947,18 +948,18 @@ fn mirror_darts(
         let legs = first.darts.iter().find(|l| l.name == dart.name)?;
         let mut chain = Vec::with_capacity(legs.a.len());
         for &l in &legs.a {
-            let q = reflect(*positions.get(*first.global.get(l as usize)? as usize)?);
+            let q = reflect(*positions.get(*first.global.get(l)?)?);
             // over the panel's vertices (not their dart copies), ties to the lower id: deterministic
-            let (g, dist) = second.global[..second.unique]
+            let (g, dist) = second.global.raw[..second.unique]
                 .iter()
-                .map(|&g| (g, positions.get(g as usize).map_or(f64::INFINITY, |p| p.distance(q))))
+                .map(|&g| (g, positions.get(g).map_or(f64::INFINITY, |p| p.distance(q))))
                 .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)))?;
             if dist > tol {
                 return None;
             }
             chain.push(second.local(g)?);
         }
-        if chain.windows(2).any(|w| !edges.contains(&(w[0].min(w[1]), w[0].max(w[1])))) {
+        if chain.windows(2).any(|w| !edges.contains(&MeshEdge::new(w[0], w[1]))) {
             return None;
         }
         let name = dart.name.replacen(&first.name, &second.name, 1);
@@ -986,7 +987,7 @@ struct Searched {
 fn search_darts(
     panel: &Panel,
     seams: &[SeamChain],
-    n_nodes: u32,
+    n_nodes: usize,
     opts: &PatternOptions,
     search: &AutoDartOptions,
 ) -> Result<Searched, PatternError> {
@@ -1007,7 +1008,7 @@ fn search_darts(
 #[expect(clippy::too_many_arguments, reason = "the parts of one pass of pattern_once, handed over once")]
 fn finish(
     t: &Template,
-    positions: &[DVec3],
+    positions: &TiSlice<VertexId, DVec3>,
     size: &str,
     panels: Vec<Panel>,
     seams: &[SeamChain],
@@ -1026,18 +1027,18 @@ fn finish(
                 let edges = panels[pi].seam_edges(&s.chain).unwrap_or_default();
                 std::iter::once(0.0)
                     .chain(edges.iter().scan(0.0, |sum, [u, w]| {
-                        *sum += uv[*u as usize].distance(uv[*w as usize]);
+                        *sum += uv[*u].distance(uv[*w]);
                         Some(*sum)
                     }))
                     .collect()
             };
             let (a, b) = (side(s.panel_a), side(s.panel_b));
-            let chain_3d: Vec<DVec3> = s.chain.iter().map(|&g| positions[g as usize]).collect();
+            let chain_3d: Vec<DVec3> = s.chain.iter().map(|&g| positions[g]).collect();
             let (la, lb) = (a.last().copied().unwrap_or(0.0), b.last().copied().unwrap_or(0.0));
             let notch_mismatch_mm = t
                 .notches
                 .iter()
-                .filter_map(|n| s.chain.iter().position(|&g| g == n.node))
+                .filter_map(|n| s.chain.iter().position(|&g| g == node_vertex(n.node)))
                 .filter_map(|k| Some((a.get(k)? - b.get(k)?).abs()))
                 .fold(0.0, f64::max);
             SeamReport {
@@ -1055,9 +1056,9 @@ fn finish(
     let mut seam_reports: Vec<SeamReport> = seam_reports;
     for (pi, panel) in panels.iter().enumerate() {
         for d in &panel.darts {
-            let leg = |ids: &[u32]| -> Vec<DVec2> { ids.iter().map(|&l| placed[pi].uv_mm[l as usize]).collect() };
+            let leg = |ids: &[PanelVertex]| -> Vec<DVec2> { ids.iter().map(|&l| placed[pi].uv_mm[l]).collect() };
             let (la, lb) = (polyline_length(&leg(&d.a)), polyline_length(&leg(&d.b)));
-            let chain_3d: Vec<DVec3> = d.a.iter().map(|&l| panel.positions[l as usize]).collect();
+            let chain_3d: Vec<DVec3> = d.a.iter().map(|&l| panel.positions[l]).collect();
             seam_reports.push(SeamReport {
                 name: d.name.clone(),
                 piece_a: panel.name.clone(),
@@ -1093,11 +1094,11 @@ fn finish(
 }
 
 /// Centroid of the edges strained above the 95th percentile and the nearest template node.
-fn hotspot(t: &Template, panel: &super::panels::Panel, uv_mm: &[DVec2]) -> Option<StrainHotspot> {
+fn hotspot(t: &Template, panel: &Panel, uv_mm: &TiSlice<PanelVertex, DVec2>) -> Option<StrainHotspot> {
     let mut edges: Vec<(f64, DVec2)> = Vec::new();
     for f in &panel.triangles {
         for k in 0..3 {
-            let (a, b) = (f[k] as usize, f[(k + 1) % 3] as usize);
+            let (a, b) = (f[k], f[(k + 1) % 3]);
             if a < b {
                 let l3 = panel.positions[a].distance(panel.positions[b]) * 1e3;
                 if l3 > 0.0 {
@@ -1112,24 +1113,23 @@ fn hotspot(t: &Template, panel: &super::panels::Panel, uv_mm: &[DVec2]) -> Optio
     edges.sort_by(|x, y| y.0.total_cmp(&x.0));
     let top = &edges[..edges.len().div_ceil(20)];
     let at = top.iter().map(|e| e.1).sum::<DVec2>() / top.len() as f64;
-    let n_nodes = t.nodes.len() as u32;
+    // the panel's template nodes: its first local vertices (ascending fine ids, nodes first)
     let (near, distance_mm) = panel
         .global
-        .iter()
-        .enumerate()
-        .take_while(|(_, &g)| g < n_nodes)
-        .map(|(l, &g)| (t.nodes[g as usize].point.as_str().to_string(), uv_mm[l].distance(at)))
+        .iter_enumerated()
+        .map_while(|(l, &g)| Some((l, vertex_node(g, t.nodes.len())?)))
+        .map(|(l, node)| (t.nodes[node as usize].point.as_str().to_string(), uv_mm[l].distance(at)))
         .min_by(|a, b| a.1.total_cmp(&b.1))?;
     Some(StrainHotspot { at, near, distance_mm })
 }
 
 /// Straightness of the waist line on the sew line (module docs).
-fn waist_deviation(t: &Template, panel: &super::panels::Panel, piece: &PatternPiece) -> Option<f64> {
+fn waist_deviation(t: &Template, panel: &Panel, piece: &PatternPiece) -> Option<f64> {
     let rim = panel.rim();
     let n = rim.len();
     let kind = |k: usize| -> Option<bool> {
-        let g = panel.global[rim[k] as usize] as usize;
-        t.nodes.get(g).map(|node| node.point.as_str().starts_with("waist_"))
+        let node = vertex_node(panel.global[rim[k]], t.nodes.len())?;
+        t.nodes.get(node as usize).map(|node| node.point.as_str().starts_with("waist_"))
     };
     // start just after a coarse node that is not on the waist, so the waist run is contiguous
     let start = (0..n).find(|&k| kind(k) == Some(false))?;
@@ -1256,7 +1256,7 @@ mod tests {
         }
         // a chain that is not a line of the panel is a typed error, not a panic
         let mut bad = plan.clone();
-        bad.found[0].chain = vec![u32::MAX, 0];
+        bad.found[0].chain = vec![VertexId(u32::MAX), VertexId(0)];
         let e =
             pattern_with_plan(&t, &fine.positions, &fine.triangles, &lineage, "ref", &opts, Some(&bad)).unwrap_err();
         assert!(matches!(e, PatternError::CarriedDart { .. }), "{e}");

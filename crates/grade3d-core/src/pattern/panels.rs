@@ -33,10 +33,42 @@
 use std::collections::HashMap;
 
 use glam::DVec3;
+use typed_index_collections::{TiSlice, TiVec};
 
-use crate::geom::mesh::boundary_loops;
+use crate::geom::mesh::{boundary_loops, typed_id, FaceId, VertexId};
+use crate::geom::topology::MeshEdge;
 use crate::refine::lineage::Lineage;
 use crate::template::format::Template;
+
+typed_id!(
+    /// A vertex of one panel, in the panel's own numbering
+    /// ([`Panel::global`] maps it to the garment mesh's [`VertexId`]).
+    ///
+    /// The two numberings do not mix: the garment's data is reached through
+    /// the panel's map,
+    ///
+    /// ```
+    /// # use grade3d_core::{pattern::panels::{Panel, PanelVertex}, refine::subdivide::RefineMesh};
+    /// fn garment_point(mesh: &RefineMesh, panel: &Panel, v: PanelVertex) -> glam::DVec3 {
+    ///     mesh.positions[panel.global[v]]
+    /// }
+    /// ```
+    ///
+    /// and a panel's vertex does not index it:
+    ///
+    /// ```compile_fail
+    /// # use grade3d_core::{pattern::panels::{Panel, PanelVertex}, refine::subdivide::RefineMesh};
+    /// fn garment_point(mesh: &RefineMesh, panel: &Panel, v: PanelVertex) -> glam::DVec3 {
+    ///     mesh.positions[v]
+    /// }
+    /// ```
+    PanelVertex
+);
+
+typed_id!(
+    /// A triangle of one panel ([`Panel::triangles`]).
+    PanelFace
+);
 
 /// Why a panel could not be cut out.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -106,27 +138,27 @@ pub struct Panel {
     pub name: String,
     /// Index of the panel in the template.
     pub index: usize,
-    /// Fine vertex id of each local vertex: ascending for the first
+    /// Fine vertex of each local vertex: ascending for the first
     /// [`Panel::unique`] vertices, then the dart duplicates.
-    pub global: Vec<u32>,
+    pub global: TiVec<PanelVertex, VertexId>,
     /// How many local vertices precede the dart duplicates.
     pub unique: usize,
     /// The panel's darts, slit open.
     pub darts: Vec<DartLegs>,
     /// Local positions (copied from the fine mesh).
-    pub positions: Vec<DVec3>,
+    pub positions: TiVec<PanelVertex, DVec3>,
     /// Triangles in local ids, orientation kept.
-    pub triangles: Vec<[u32; 3]>,
+    pub triangles: TiVec<PanelFace, [PanelVertex; 3]>,
     /// The boundary loop in local ids, in the faces' orientation, starting at
     /// its smallest template node.
-    pub outline: Vec<u32>,
+    pub outline: Vec<PanelVertex>,
 }
 
 impl Panel {
     /// Local id of a fine vertex, if the panel has it (on a dart, the vertex of
     /// the first leg).
-    pub fn local(&self, global: u32) -> Option<u32> {
-        self.global[..self.unique].binary_search(&global).ok().map(|i| i as u32)
+    pub fn local(&self, global: VertexId) -> Option<PanelVertex> {
+        self.global.raw[..self.unique].binary_search(&global).ok().map(PanelVertex::from)
     }
 }
 
@@ -142,14 +174,14 @@ impl Panel {
     /// Why the chain cannot be slit (its first edge is not in the panel, it
     /// does not start on the outline, or the panel would stop being a disc);
     /// the panel is left unchanged then.
-    pub fn add_dart(&mut self, name: &str, chain: &[u32]) -> Result<(), String> {
+    pub fn add_dart(&mut self, name: &str, chain: &[PanelVertex]) -> Result<(), String> {
         let mut triangles = self.triangles.clone();
         let mut global = self.global.clone();
         let legs = slit(&mut triangles, &mut global, chain)?;
         let outline = disc_outline(&triangles, &global)
             .map_err(|loops| format!("the slit leaves {loops} boundary loops, not one"))?;
         for &v in &chain[..chain.len() - 1] {
-            self.positions.push(self.positions[v as usize]);
+            self.positions.push(self.positions[v]);
         }
         self.triangles = triangles;
         self.global = global;
@@ -162,12 +194,12 @@ impl Panel {
     /// outline, in local ids, one per consecutive pair; `None` if a pair is
     /// not an outline edge. Where a dart opens on the seam, the edges either
     /// side of its mouth end on the two copies of the mouth vertex.
-    pub fn seam_edges(&self, chain: &[u32]) -> Option<Vec<[u32; 2]>> {
+    pub fn seam_edges(&self, chain: &[VertexId]) -> Option<Vec<[PanelVertex; 2]>> {
         let n = self.outline.len();
-        let mut by_pair: HashMap<(u32, u32), [u32; 2]> = HashMap::with_capacity(2 * n);
+        let mut by_pair: HashMap<(VertexId, VertexId), [PanelVertex; 2]> = HashMap::with_capacity(2 * n);
         for k in 0..n {
             let (u, w) = (self.outline[k], self.outline[(k + 1) % n]);
-            let (gu, gw) = (self.global[u as usize], self.global[w as usize]);
+            let (gu, gw) = (self.global[u], self.global[w]);
             by_pair.entry((gu, gw)).or_insert([u, w]);
             by_pair.entry((gw, gu)).or_insert([w, u]);
         }
@@ -177,9 +209,9 @@ impl Panel {
     /// A seam's fine chain as runs of local ids along the outline: one run,
     /// or one more for each dart opening on the seam (module docs of
     /// [`super::darts`]); `None` if the seam is not on this panel's outline.
-    pub fn seam_runs(&self, chain: &[u32]) -> Option<Vec<Vec<u32>>> {
+    pub fn seam_runs(&self, chain: &[VertexId]) -> Option<Vec<Vec<PanelVertex>>> {
         let edges = self.seam_edges(chain)?;
-        let mut runs: Vec<Vec<u32>> = Vec::new();
+        let mut runs: Vec<Vec<PanelVertex>> = Vec::new();
         for [u, w] in edges {
             match runs.last_mut() {
                 Some(run) if run.last() == Some(&u) => run.push(w),
@@ -192,8 +224,8 @@ impl Panel {
     /// The outline with every dart closed: the legs' vertices (all but the two
     /// openings) left out, so the line runs straight across each dart's opening.
     /// This is the sew line; the legs are drawn as internal lines.
-    pub fn rim(&self) -> Vec<u32> {
-        let legs: std::collections::HashSet<u32> =
+    pub fn rim(&self) -> Vec<PanelVertex> {
+        let legs: std::collections::HashSet<PanelVertex> =
             self.darts.iter().flat_map(|d| d.a[1..].iter().chain(&d.b[1..]).copied()).collect();
         self.outline.iter().copied().filter(|v| !legs.contains(v)).collect()
     }
@@ -206,9 +238,9 @@ pub struct DartLegs {
     /// Dart name.
     pub name: String,
     /// First leg (the original vertices).
-    pub a: Vec<u32>,
+    pub a: Vec<PanelVertex>,
     /// Second leg (the duplicates, then the apex).
-    pub b: Vec<u32>,
+    pub b: Vec<PanelVertex>,
 }
 
 /// A seam: the fine chain along its coarse edges, and the two panels.
@@ -220,8 +252,8 @@ pub struct SeamChain {
     pub panel_a: usize,
     /// Panel index of side b.
     pub panel_b: usize,
-    /// Fine vertex ids along the seam.
-    pub chain: Vec<u32>,
+    /// Fine vertices along the seam.
+    pub chain: Vec<VertexId>,
 }
 
 /// Cuts the fine mesh (`positions`, `triangles`) the refinement made of the
@@ -232,8 +264,8 @@ pub struct SeamChain {
 /// [`PanelError`] (module docs).
 pub fn cut(
     t: &Template,
-    positions: &[DVec3],
-    triangles: &[[u32; 3]],
+    positions: &TiSlice<VertexId, DVec3>,
+    triangles: &TiSlice<FaceId, [VertexId; 3]>,
     lineage: &Lineage,
 ) -> Result<(Vec<Panel>, Vec<SeamChain>), PanelError> {
     let plain = cut_plain(t, positions, triangles, lineage)?;
@@ -260,7 +292,12 @@ impl CutGarment {
     /// [`PanelError::BadDart`] for a dart whose edges do not meet end to end,
     /// that is not inside its panel or cannot be slit;
     /// [`PanelError::NotADisc`] if a slit panel is not a disc.
-    pub fn darted(&self, t: &Template, positions: &[DVec3], lineage: &Lineage) -> Result<Vec<Panel>, PanelError> {
+    pub fn darted(
+        &self,
+        t: &Template,
+        positions: &TiSlice<VertexId, DVec3>,
+        lineage: &Lineage,
+    ) -> Result<Vec<Panel>, PanelError> {
         let mut out = Vec::with_capacity(self.panels.len());
         for plain in &self.panels {
             let mut local_tris = plain.triangles.clone();
@@ -273,8 +310,8 @@ impl CutGarment {
                 })?;
                 let Some(mut chain) = chain
                     .iter()
-                    .map(|&g| global.binary_search(&g).ok().map(|i| i as u32))
-                    .collect::<Option<Vec<u32>>>()
+                    .map(|&g| global.raw.binary_search(&g).ok().map(PanelVertex::from))
+                    .collect::<Option<Vec<PanelVertex>>>()
                 else {
                     return Err(PanelError::BadDart {
                         dart: d.name.clone(),
@@ -282,7 +319,8 @@ impl CutGarment {
                     });
                 };
                 // run it from the outline to the apex
-                let rim: std::collections::HashSet<u32> = boundary_loops(&local_tris).into_iter().flatten().collect();
+                let rim: std::collections::HashSet<PanelVertex> =
+                    boundary_loops(&local_tris.raw).into_iter().flatten().collect();
                 if !rim.contains(&chain[0]) && chain.last().is_some_and(|v| rim.contains(v)) {
                     chain.reverse();
                 }
@@ -299,7 +337,7 @@ impl CutGarment {
             out.push(Panel {
                 name: plain.name.clone(),
                 index: plain.index,
-                positions: global.iter().map(|&g| positions[g as usize]).collect(),
+                positions: global.iter().map(|&g| positions[g]).collect(),
                 global,
                 unique: plain.unique,
                 darts,
@@ -318,8 +356,8 @@ impl CutGarment {
 /// [`PanelError`] (module docs).
 pub fn cut_plain(
     t: &Template,
-    positions: &[DVec3],
-    triangles: &[[u32; 3]],
+    positions: &TiSlice<VertexId, DVec3>,
+    triangles: &TiSlice<FaceId, [VertexId; 3]>,
     lineage: &Lineage,
 ) -> Result<CutGarment, PanelError> {
     let levels = lineage.levels();
@@ -331,18 +369,23 @@ pub fn cut_plain(
     }
     let mut panels = Vec::with_capacity(t.panels.len());
     for (index, p) in t.panels.iter().enumerate() {
-        let fine: Vec<[u32; 3]> =
-            p.faces.iter().flat_map(|&f| triangles[f as usize * per..(f as usize + 1) * per].iter().copied()).collect();
-        let mut global: Vec<u32> = fine.iter().flatten().copied().collect();
+        // face f of the coarse mesh is faces f·4^L … (f+1)·4^L − 1 of the fine one (lineage)
+        let fine: Vec<[VertexId; 3]> = p
+            .faces
+            .iter()
+            .flat_map(|&f| triangles.raw[f as usize * per..(f as usize + 1) * per].iter().copied())
+            .collect();
+        let mut global: Vec<VertexId> = fine.iter().flatten().copied().collect();
         global.sort_unstable();
         global.dedup();
-        let local = |g: u32| global.binary_search(&g).map(|i| i as u32).unwrap_or(u32::MAX);
-        let local_tris: Vec<[u32; 3]> = fine.iter().map(|t| t.map(local)).collect();
+        let global: TiVec<PanelVertex, VertexId> = global.into();
+        let local = |g: VertexId| global.raw.binary_search(&g).map(PanelVertex::from).unwrap_or(PanelVertex(u32::MAX));
+        let local_tris: TiVec<PanelFace, [PanelVertex; 3]> = fine.iter().map(|t| t.map(local)).collect();
         let unique = global.len();
         let darts = Vec::new();
         let outline = disc_outline(&local_tris, &global)
             .map_err(|loops| PanelError::NotADisc { panel: p.name.clone(), loops })?;
-        let positions = global.iter().map(|&g| positions[g as usize]).collect();
+        let positions = global.iter().map(|&g| positions[g]).collect();
         panels.push(Panel {
             name: p.name.clone(),
             index,
@@ -366,8 +409,8 @@ pub fn cut_plain(
         let chain = seam_chain(t, lineage, s.name.as_str(), &s.edges)?;
         for &pi in &[a, b] {
             let panel = &panels[pi];
-            let on_outline: std::collections::HashSet<u32> =
-                panel.outline.iter().map(|&l| panel.global[l as usize]).collect();
+            let on_outline: std::collections::HashSet<VertexId> =
+                panel.outline.iter().map(|&l| panel.global[l]).collect();
             if let Some(&off) = chain.iter().find(|g| !on_outline.contains(g)) {
                 let edge = s
                     .edges
@@ -375,7 +418,7 @@ pub fn cut_plain(
                     .copied()
                     .find(|&e| {
                         let e = &t.edges[e as usize];
-                        lineage.chain(e.start, e.end).is_some_and(|c| c.contains(&off))
+                        lineage.chain(VertexId(e.start), VertexId(e.end)).is_some_and(|c| c.contains(&off))
                     })
                     .unwrap_or(0);
                 return Err(PanelError::SeamOffOutline { seam: s.name.clone(), edge, panel: panel.name.clone() });
@@ -391,25 +434,27 @@ pub fn cut_plain(
 /// face holding the half-edge `chain[0] → chain[1]` without crossing the chain —
 /// get duplicates of every chain vertex but the apex, appended to `global`.
 /// Returns the second leg (duplicates, then the apex).
-fn slit(triangles: &mut [[u32; 3]], global: &mut Vec<u32>, chain: &[u32]) -> Result<Vec<u32>, String> {
+fn slit(
+    triangles: &mut TiSlice<PanelFace, [PanelVertex; 3]>,
+    global: &mut TiVec<PanelVertex, VertexId>,
+    chain: &[PanelVertex],
+) -> Result<Vec<PanelVertex>, String> {
     if chain.len() < 2 {
         return Err("needs at least one edge".into());
     }
     let k = chain.len() - 1;
-    let cut: std::collections::HashSet<(u32, u32)> =
-        chain.windows(2).map(|w| (w[0].min(w[1]), w[0].max(w[1]))).collect();
-    let on_chain: HashMap<u32, usize> = chain[..k].iter().enumerate().map(|(i, &v)| (v, i)).collect();
-    let touches = |f: &[u32; 3]| f.iter().any(|v| on_chain.contains_key(v));
+    let cut: std::collections::HashSet<MeshEdge<PanelVertex>> =
+        chain.windows(2).map(|w| MeshEdge::new(w[0], w[1])).collect();
+    let on_chain: HashMap<PanelVertex, usize> = chain[..k].iter().enumerate().map(|(i, &v)| (v, i)).collect();
+    let touches = |f: &[PanelVertex; 3]| f.iter().any(|v| on_chain.contains_key(v));
     let start = triangles
-        .iter()
         .position(|f| (0..3).any(|j| f[j] == chain[0] && f[(j + 1) % 3] == chain[1]))
         .ok_or_else(|| "its first edge is not in the panel".to_string())?;
     // faces around the chain, and which share a non-chain edge
-    let mut by_edge: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
-    for (fi, f) in triangles.iter().enumerate().filter(|(_, f)| touches(f)) {
+    let mut by_edge: HashMap<MeshEdge<PanelVertex>, Vec<PanelFace>> = HashMap::new();
+    for (fi, f) in triangles.iter_enumerated().filter(|(_, f)| touches(f)) {
         for j in 0..3 {
-            let (a, b) = (f[j], f[(j + 1) % 3]);
-            by_edge.entry((a.min(b), a.max(b))).or_default().push(fi);
+            by_edge.entry(MeshEdge::new(f[j], f[(j + 1) % 3])).or_default().push(fi);
         }
     }
     let mut side = std::collections::HashSet::from([start]);
@@ -417,8 +462,7 @@ fn slit(triangles: &mut [[u32; 3]], global: &mut Vec<u32>, chain: &[u32]) -> Res
     while let Some(fi) = stack.pop() {
         let f = triangles[fi];
         for j in 0..3 {
-            let (a, b) = (f[j], f[(j + 1) % 3]);
-            let key = (a.min(b), a.max(b));
+            let key = MeshEdge::new(f[j], f[(j + 1) % 3]);
             if cut.contains(&key) {
                 continue;
             }
@@ -434,38 +478,42 @@ fn slit(triangles: &mut [[u32; 3]], global: &mut Vec<u32>, chain: &[u32]) -> Res
     if side.len() >= all {
         return Err("the faces around it are not split by it (does it start on the outline?)".into());
     }
-    let first_dup = global.len() as u32;
+    let first_dup = global.len();
     for &v in &chain[..k] {
-        global.push(global[v as usize]);
+        global.push(global[v]);
     }
     for &fi in &side {
         for v in triangles[fi].iter_mut() {
             if let Some(&i) = on_chain.get(v) {
-                *v = first_dup + i as u32;
+                *v = PanelVertex::from(first_dup + i);
             }
         }
     }
-    Ok((0..k as u32).map(|i| first_dup + i).chain(std::iter::once(chain[k])).collect())
+    Ok((0..k).map(|i| PanelVertex::from(first_dup + i)).chain(std::iter::once(chain[k])).collect())
 }
 
 /// The one boundary loop of a panel's triangles, started at its smallest
 /// fine vertex id (a template node: deterministic); the number of loops when
 /// there is not exactly one.
-pub(crate) fn disc_outline(triangles: &[[u32; 3]], global: &[u32]) -> Result<Vec<u32>, usize> {
-    let loops = boundary_loops(triangles);
+pub(crate) fn disc_outline(
+    triangles: &TiSlice<PanelFace, [PanelVertex; 3]>,
+    global: &TiSlice<PanelVertex, VertexId>,
+) -> Result<Vec<PanelVertex>, usize> {
+    let loops = boundary_loops(&triangles.raw);
     if loops.len() != 1 {
         return Err(loops.len());
     }
     let mut outline = loops.into_iter().next().unwrap_or_default();
-    if let Some(start) = (0..outline.len()).min_by_key(|&k| global[outline[k] as usize]) {
+    if let Some(start) = (0..outline.len()).min_by_key(|&k| global[outline[k]]) {
         outline.rotate_left(start);
     }
     Ok(outline)
 }
 
 /// The fine chain of a seam's coarse edges, oriented so consecutive edges meet.
-fn seam_chain(t: &Template, lineage: &Lineage, seam: &str, edges: &[u32]) -> Result<Vec<u32>, PanelError> {
-    let ends = |e: u32| (t.edges[e as usize].start, t.edges[e as usize].end);
+fn seam_chain(t: &Template, lineage: &Lineage, seam: &str, edges: &[u32]) -> Result<Vec<VertexId>, PanelError> {
+    // coarse node i is fine vertex i (module docs)
+    let ends = |e: u32| (VertexId(t.edges[e as usize].start), VertexId(t.edges[e as usize].end));
     let Some(&first) = edges.first() else { return Ok(Vec::new()) };
     let (mut a, mut b) = ends(first);
     if let Some(&second) = edges.get(1) {
@@ -511,15 +559,16 @@ mod tests {
             let opts = RefineOptions { levels, ..Default::default() };
             let coarse = RefineMesh::from_coarse(&m0, &edges).expect("coarse");
             let Refined { mesh: fine, lineage, .. } =
-                refine(coarse, &opts, |_: &mut [DVec3], _: &mut [bool]| {}).expect("refine");
+                refine(coarse, &opts, |_: &mut TiSlice<VertexId, DVec3>, _: &mut TiSlice<VertexId, bool>| {})
+                    .expect("refine");
             let (panels, seams) = cut(&t, &fine.positions, &fine.triangles, &lineage).expect("cut");
             // every coarse edge's chain has 2^L + 1 vertices, and its split vertices lie
             // on the fine mesh's edges in order
-            let fine_edges: std::collections::HashSet<(u32, u32)> = edge_keys(&fine.triangles).into_iter().collect();
+            let fine_edges: std::collections::HashSet<MeshEdge> = edge_keys(&fine.triangles).into_iter().collect();
             for e in &t.edges {
-                let c = lineage.chain(e.start, e.end).expect("coarse edge");
+                let c = lineage.chain(VertexId(e.start), VertexId(e.end)).expect("coarse edge");
                 assert_eq!(c.len(), 5);
-                assert!(c.windows(2).all(|w| fine_edges.contains(&(w[0].min(w[1]), w[0].max(w[1])))));
+                assert!(c.windows(2).all(|w| fine_edges.contains(&MeshEdge::new(w[0], w[1]))));
             }
             // panels partition the faces
             let total: usize = panels.iter().map(|p| p.triangles.len()).sum();
@@ -547,7 +596,8 @@ mod tests {
         let t = builtin().expect("library").remove(0);
         let mut one_level = Lineage::new();
         one_level.push_level(Default::default());
-        let err = cut(&t, &[], &[[0, 1, 2]], &one_level).unwrap_err();
+        let tris: TiVec<FaceId, _> = vec![[0, 1, 2].map(VertexId)].into();
+        let err = cut(&t, TiSlice::from_ref(&[]), &tris, &one_level).unwrap_err();
         assert!(matches!(err, PanelError::FaceCount { fine: 1, levels: 1, .. }), "{err}");
     }
 }

@@ -77,7 +77,10 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use crate::body::contact::ThighContact;
+use typed_index_collections::{TiSlice, TiVec};
+
 use crate::geom::intersect::{count_pairs, intersecting_pairs};
+use crate::geom::mesh::{FaceId, VertexId};
 use crate::geom::winding::WindingTree;
 use crate::template::codec::CoarseMesh;
 use crate::template::profile::{Profile, ProfileError};
@@ -268,25 +271,28 @@ pub fn clear_coarse(
 }
 
 /// Area-weighted vertex normals of a triangle list (zero for isolated vertices).
-fn vertex_normals(positions: &[DVec3], triangles: &[[u32; 3]]) -> Vec<DVec3> {
-    let mut n = vec![DVec3::ZERO; positions.len()];
+fn vertex_normals(
+    positions: &TiSlice<VertexId, DVec3>,
+    triangles: &TiSlice<FaceId, [VertexId; 3]>,
+) -> TiVec<VertexId, DVec3> {
+    let mut n: TiVec<VertexId, DVec3> = TiVec::from(vec![DVec3::ZERO; positions.len()]);
     for t in triangles {
-        let [a, b, c] = t.map(|v| positions[v as usize]);
+        let [a, b, c] = t.map(|v| positions[v]);
         let w = (b - a).cross(c - a);
-        for v in t {
-            n[*v as usize] += w;
+        for &v in t {
+            n[v] += w;
         }
     }
     n.iter().map(|v| v.normalize_or_zero()).collect()
 }
 
 /// The one-ring neighbours of every vertex, sorted.
-fn neighbours(n: usize, triangles: &[[u32; 3]]) -> Vec<Vec<u32>> {
-    let mut ring = vec![Vec::new(); n];
+fn neighbours(n: usize, triangles: &TiSlice<FaceId, [VertexId; 3]>) -> TiVec<VertexId, Vec<VertexId>> {
+    let mut ring: TiVec<VertexId, Vec<VertexId>> = TiVec::from(vec![Vec::new(); n]);
     for t in triangles {
         for k in 0..3 {
-            ring[t[k] as usize].push(t[(k + 1) % 3]);
-            ring[t[k] as usize].push(t[(k + 2) % 3]);
+            ring[t[k]].push(t[(k + 1) % 3]);
+            ring[t[k]].push(t[(k + 2) % 3]);
         }
     }
     for r in &mut ring {
@@ -299,14 +305,14 @@ fn neighbours(n: usize, triangles: &[[u32; 3]]) -> Vec<Vec<u32>> {
 /// Spreads the lifts `need` over `rings` rings of neighbours: a vertex with
 /// no lift of its own takes `share` × the mean lift of its neighbours that
 /// have one (signed), ring by ring outward; lifted vertices keep theirs.
-fn fade(need: &mut [f64], ring: &[Vec<u32>], rings: usize, share: f64) {
+fn fade(need: &mut TiSlice<VertexId, f64>, ring: &TiSlice<VertexId, Vec<VertexId>>, rings: usize, share: f64) {
     for _ in 0..rings {
-        let before = need.to_vec();
-        for (i, r) in ring.iter().enumerate() {
+        let before = need.to_owned();
+        for (i, r) in ring.iter_enumerated() {
             if before[i] != 0.0 {
                 continue;
             }
-            let lifted: Vec<f64> = r.iter().map(|&j| before[j as usize]).filter(|&x| x != 0.0).collect();
+            let lifted: Vec<f64> = r.iter().map(|&j| before[j]).filter(|&x| x != 0.0).collect();
             if !lifted.is_empty() {
                 need[i] = share * lifted.iter().sum::<f64>() / lifted.len() as f64;
             }
@@ -320,8 +326,8 @@ fn fade(need: &mut [f64], ring: &[Vec<u32>], rings: usize, share: f64) {
 /// left at `contact`, the body's thigh contact, are counted apart.
 pub fn clear_surface(
     tree: &WindingTree,
-    positions: &mut [DVec3],
-    triangles: &[[u32; 3]],
+    positions: &mut TiSlice<VertexId, DVec3>,
+    triangles: &TiSlice<FaceId, [VertexId; 3]>,
     clearance_mm: f64,
     contact: Option<&ThighContact>,
     opts: &ClearOptions,
@@ -329,11 +335,11 @@ pub fn clear_surface(
     let c = clearance_mm * 1e-3;
     let lc = opts.lift_clearance_mm * 1e-3;
     let max_lift = opts.max_lift_mm * 1e-3;
-    let start = positions.to_vec();
+    let start = positions.to_owned();
     let mut report = SurfaceClearReport { garment_triangles: triangles.len(), ..Default::default() };
     let mut pairs = intersecting_pairs(tree, positions, triangles);
     (report.pairs_before, report.triangles_before) = count_pairs(&pairs);
-    let mut need = vec![0.0f64; positions.len()];
+    let mut need: TiVec<VertexId, f64> = TiVec::from(vec![0.0f64; positions.len()]);
     let ring = neighbours(positions.len(), triangles);
     while !pairs.is_empty() && report.rounds < opts.max_rounds {
         report.rounds += 1;
@@ -341,7 +347,7 @@ pub fn clear_surface(
         let normals = vertex_normals(positions, triangles);
         // the way each garment triangle's crossed body triangles face: both ways, a crease
         let facing = |pair: &crate::geom::intersect::IntersectingPair| {
-            let [a, b, cc] = triangles[pair.garment as usize].map(|v| positions[v as usize]);
+            let [a, b, cc] = triangles[pair.garment].map(|v| positions[v]);
             let body = tree.face_corners(pair.body);
             let nb = (body[1] - body[0]).cross(body[2] - body[0]);
             if nb.dot((b - a).cross(cc - a)) < 0.0 {
@@ -350,7 +356,7 @@ pub fn clear_surface(
                 1
             }
         };
-        let mut ways: BTreeMap<u32, (bool, bool)> = BTreeMap::new();
+        let mut ways: BTreeMap<FaceId, (bool, bool)> = BTreeMap::new();
         for pair in &pairs {
             let w = ways.entry(pair.garment).or_default();
             if facing(pair) < 0 {
@@ -360,8 +366,8 @@ pub fn clear_surface(
             }
         }
         for pair in &pairs {
-            let tri = triangles[pair.garment as usize];
-            let [a, b, cc] = tri.map(|v| positions[v as usize]);
+            let tri = triangles[pair.garment];
+            let [a, b, cc] = tri.map(|v| positions[v]);
             let n = (b - a).cross(cc - a).normalize_or_zero();
             let body = tree.face_corners(pair.body);
             let height = |side: f64| body.iter().map(|&v| side * (v - a).dot(n)).fold(0.0f64, f64::max);
@@ -378,15 +384,14 @@ pub fn clear_surface(
             };
             let h = height(side);
             let lift = side * (h + lc).min(max_lift);
-            for v in tri {
-                let k = v as usize;
+            for k in tri {
                 if lift.abs() > need[k].abs() {
                     need[k] = lift;
                 }
             }
         }
         fade(&mut need, &ring, opts.falloff_rings, opts.falloff);
-        for (i, p) in positions.iter_mut().enumerate() {
+        for (i, p) in positions.iter_mut_enumerated() {
             if need[i] != 0.0 {
                 *p += normals[i] * need[i];
                 report.lifts += 1;
@@ -399,8 +404,7 @@ pub fn clear_surface(
     }
     report.pairs_after = pairs.len();
     report.pairs_after_at_thigh_contact = contact.map_or(0, |c| {
-        let garment =
-            |p: &crate::geom::intersect::IntersectingPair| triangles[p.garment as usize].map(|v| positions[v as usize]);
+        let garment = |p: &crate::geom::intersect::IntersectingPair| triangles[p.garment].map(|v| positions[v]);
         pairs.iter().filter(|p| c.reaches(&tree.face_corners(p.body)) || c.reaches(&garment(p))).count()
     });
     for (p, q) in positions.iter().zip(&start) {
@@ -434,8 +438,8 @@ mod tests {
         let body = sphere(0.1, 4);
         let tree = WindingTree::new(&body, &WindingOptions::default());
         let shell = sphere(0.103, 0);
-        let tris: Vec<[u32; 3]> = shell.triangles().iter().map(|t| t.map(|v| v.0)).collect();
-        let mut pos = shell.positions().to_vec();
+        let tris: TiVec<FaceId, [VertexId; 3]> = shell.triangles().to_vec().into();
+        let mut pos: TiVec<VertexId, DVec3> = shell.positions().to_vec().into();
         assert!(pos.iter().all(|p| !tree.is_inside(*p)));
         let report = clear_surface(&tree, &mut pos, &tris, 3.0, None, &ClearOptions::default());
         assert!(report.pairs_before > 0, "{report:?}");
@@ -443,7 +447,7 @@ mod tests {
         assert_eq!(report.pairs_after, 0, "{report:?}");
         assert!(intersecting_pairs(&tree, &pos, &tris).is_empty());
         // the icosahedron's inradius must reach the sphere: ≥ 0.1 m / 0.7947 (inradius/circumradius)
-        let inradius = pos[0].length() * 0.794_654_5;
+        let inradius = pos.raw[0].length() * 0.794_654_5;
         assert!(inradius >= 0.1, "inradius {inradius}");
         // lifted evenly: every vertex moved the same amount along its normal (symmetry)
         let r: Vec<f64> = pos.iter().map(|p| p.length()).collect();

@@ -35,7 +35,10 @@
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
+use typed_index_collections::TiSlice;
+
 use crate::collide::depth::{inside_with_margin, DepthMap};
+use crate::geom::mesh::VertexId;
 use crate::geom::winding::WindingTree;
 use crate::refine::clear::{push_out, ClearOptions, CoarseClearReport, SurfaceClearReport};
 
@@ -96,19 +99,19 @@ impl<'a> Collider<'a> {
     /// The hook: refuse updates that enter the body, push out what is inside,
     /// and hold both for the rest of the level (`held` as in
     /// [`super::subdivide::refine`]).
-    pub fn after_sweep(&mut self, positions: &mut [DVec3], held: &mut [bool]) {
+    pub fn after_sweep(&mut self, positions: &mut TiSlice<VertexId, DVec3>, held: &mut TiSlice<VertexId, bool>) {
         let clearance = self.opts.clearance_mm * 1e-3;
         let margin = self.opts.detection_margin_mm * 1e-3;
         let maps = self.maps;
         let hit = |q: DVec3| inside_with_margin(maps, q, margin);
         let same_level = self.previous.len() == positions.len();
-        for (i, p) in positions.iter_mut().enumerate() {
+        for (i, p) in positions.iter_mut_enumerated() {
             if held.get(i).copied().unwrap_or(true) {
                 continue;
             }
             let Some(probe) = hit(*p) else { continue };
-            if same_level && hit(self.previous[i]).is_none() {
-                let from = self.previous[i];
+            if same_level && hit(self.previous[i.idx()]).is_none() {
+                let from = self.previous[i.idx()];
                 let n = self.opts.substeps.max(1);
                 let mut kept = from;
                 for k in (1..n).rev() {
@@ -136,7 +139,7 @@ impl<'a> Collider<'a> {
             held[i] = true;
         }
         self.previous.clear();
-        self.previous.extend_from_slice(positions);
+        self.previous.extend_from_slice(&positions.raw);
     }
 }
 
@@ -147,7 +150,12 @@ const SETTLE_TRIES: usize = 4;
 /// finds inside the body goes to its closest body point plus `clearance_mm`
 /// outward. Returns how many moved. A vertex exactly on the surface has no
 /// direction and is left (it is not inside by more than rounding).
-pub fn settle_exact(tree: &WindingTree, positions: &mut [DVec3], fixed: &[bool], clearance_mm: f64) -> usize {
+pub fn settle_exact(
+    tree: &WindingTree,
+    positions: &mut TiSlice<VertexId, DVec3>,
+    fixed: &TiSlice<VertexId, bool>,
+    clearance_mm: f64,
+) -> usize {
     let clearance = clearance_mm * 1e-3;
     let mut moved = 0;
     for (p, &f) in positions.iter_mut().zip(fixed) {
@@ -173,14 +181,25 @@ pub fn settle_exact(tree: &WindingTree, positions: &mut [DVec3], fixed: &[bool],
 
 impl Collider<'_> {
     /// [`settle_exact`] with this collider's clearance, counted in its report.
-    pub fn settle(&mut self, tree: &WindingTree, positions: &mut [DVec3], fixed: &[bool]) {
+    pub fn settle(
+        &mut self,
+        tree: &WindingTree,
+        positions: &mut TiSlice<VertexId, DVec3>,
+        fixed: &TiSlice<VertexId, bool>,
+    ) {
         self.report.settled += settle_exact(tree, positions, fixed, self.opts.clearance_mm);
     }
 
     /// The exact final pass for the `fixed` vertices: each one `tree` finds
     /// inside goes out to [`ClearOptions::fixed_clearance_mm`]
     /// ([`push_out`]), counted in this collider's report.
-    pub fn settle_fixed(&mut self, tree: &WindingTree, positions: &mut [DVec3], fixed: &[bool], opts: &ClearOptions) {
+    pub fn settle_fixed(
+        &mut self,
+        tree: &WindingTree,
+        positions: &mut TiSlice<VertexId, DVec3>,
+        fixed: &TiSlice<VertexId, bool>,
+        opts: &ClearOptions,
+    ) {
         for (p, &f) in positions.iter_mut().zip(fixed) {
             if f && tree.is_inside(*p) && push_out(tree, p, opts.fixed_clearance_mm * 1e-3, opts.max_tries).is_some() {
                 self.report.fixed_settled += 1;

@@ -90,12 +90,14 @@
 
 use std::collections::BTreeMap;
 
+use crate::geom::mesh::{FaceId, VertexId};
 use crate::geom::topology::{check_edge_uses, triangle_edge_uses, MeshEdge, TopologyError};
 use crate::refine::lineage::Lineage;
 use crate::template::codec::CoarseMesh;
 use crate::template::profile::Profile;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
+use typed_index_collections::{TiSlice, TiVec};
 
 /// How the fairing system `U²(v) = 0` (free vertices) is solved (module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -161,9 +163,9 @@ pub enum RefineError {
     #[error("face {face} names vertex {vertex}, but there are {count} vertices")]
     IndexOutOfRange {
         /// The face.
-        face: usize,
+        face: FaceId,
         /// The vertex id.
-        vertex: u32,
+        vertex: VertexId,
         /// Number of vertices.
         count: usize,
     },
@@ -171,15 +173,15 @@ pub enum RefineError {
     #[error("face {face} names vertex {vertex} twice")]
     DegenerateFace {
         /// The face.
-        face: usize,
+        face: FaceId,
         /// The vertex id.
-        vertex: u32,
+        vertex: VertexId,
     },
     /// A position is NaN or infinite.
     #[error("vertex {vertex} has a non-finite coordinate")]
     NonFinitePosition {
         /// The vertex id.
-        vertex: u32,
+        vertex: VertexId,
     },
     /// `fixed` does not have one flag per vertex.
     #[error("{flags} fixed flags for {vertices} vertices")]
@@ -201,18 +203,18 @@ pub enum RefineError {
     #[error("profile on {a}–{b}, which is not an edge of the mesh keyed (min, max)")]
     ProfileOnMissingEdge {
         /// First id of the key.
-        a: u32,
+        a: VertexId,
         /// Second id of the key.
-        b: u32,
+        b: VertexId,
     },
     /// A profile is unusable: its ends are not its edge's vertices, two profiles share
     /// an edge, or it cannot be reversed.
     #[error("profile on edge {a}–{b}: {reason}")]
     Profile {
         /// Smaller vertex id.
-        a: u32,
+        a: VertexId,
         /// Larger vertex id.
-        b: u32,
+        b: VertexId,
         /// What is wrong.
         reason: String,
     },
@@ -229,13 +231,13 @@ pub enum RefineError {
 #[derive(Debug, Clone, PartialEq)]
 pub struct RefineMesh {
     /// Vertex positions.
-    pub positions: Vec<DVec3>,
-    /// Triangles (vertex ids), counter-clockwise seen from outside.
-    pub triangles: Vec<[u32; 3]>,
+    pub positions: TiVec<VertexId, DVec3>,
+    /// Triangles, counter-clockwise seen from outside.
+    pub triangles: TiVec<FaceId, [VertexId; 3]>,
     /// Per vertex: never moved by fairing (coarse nodes, profile and Butterfly vertices).
-    pub fixed: Vec<bool>,
-    /// Edge profiles keyed `(min, max)` vertex ids, each oriented from `min` to `max`.
-    pub edge_profiles: BTreeMap<(u32, u32), Profile>,
+    pub fixed: TiVec<VertexId, bool>,
+    /// Edge profiles, each oriented from the edge's lower vertex to its higher.
+    pub edge_profiles: BTreeMap<MeshEdge, Profile>,
 }
 
 /// What [`refine`] made: the fine mesh `M_L`, how each level's fairing
@@ -277,14 +279,14 @@ impl RefineMesh {
     /// is profiled again), from `a` to `b`: the shortest path between them
     /// over profiled edges (breadth first; the adjacency is built once).
     /// `None` where no profiled path joins them.
-    pub fn profile_chains(&self, pairs: &[(u32, u32)]) -> Vec<Option<Vec<u32>>> {
-        let mut next: BTreeMap<u32, Vec<u32>> = BTreeMap::new();
-        for &(x, y) in self.edge_profiles.keys() {
+    pub fn profile_chains(&self, pairs: &[(VertexId, VertexId)]) -> Vec<Option<Vec<VertexId>>> {
+        let mut next: BTreeMap<VertexId, Vec<VertexId>> = BTreeMap::new();
+        for &MeshEdge { a: x, b: y } in self.edge_profiles.keys() {
             next.entry(x).or_default().push(y);
             next.entry(y).or_default().push(x);
         }
-        let chain = |a: u32, b: u32| -> Option<Vec<u32>> {
-            let mut came: BTreeMap<u32, u32> = BTreeMap::from([(a, a)]);
+        let chain = |a: VertexId, b: VertexId| -> Option<Vec<VertexId>> {
+            let mut came: BTreeMap<VertexId, VertexId> = BTreeMap::from([(a, a)]);
             let mut queue = std::collections::VecDeque::from([a]);
             while let Some(v) = queue.pop_front() {
                 if v == b {
@@ -313,8 +315,7 @@ impl RefineMesh {
     /// # Errors
     /// [`crate::geom::mesh::MeshError`] if a position is not finite or a triangle is invalid.
     pub fn to_tri_mesh(&self) -> Result<crate::geom::mesh::TriMesh, crate::geom::mesh::MeshError> {
-        let tris = self.triangles.iter().map(|t| t.map(crate::geom::mesh::VertexId)).collect();
-        crate::geom::mesh::TriMesh::new(self.positions.clone(), tris)
+        crate::geom::mesh::TriMesh::new(self.positions.raw.clone(), self.triangles.raw.clone())
     }
 
     /// The coarse mesh `M0` of a decoded template: all nodes fixed, every profile
@@ -327,26 +328,27 @@ impl RefineMesh {
     /// [`RefineError::EdgeTable`] for a length mismatch; a profile on a pair that is not a
     /// mesh edge, or whose ends are not its nodes, and every mesh error of the contract.
     pub fn from_coarse(m: &CoarseMesh, edges: &[(u32, u32)]) -> Result<Self, RefineError> {
+        let node = VertexId;
         if edges.len() != m.profiles.len() {
             return Err(RefineError::EdgeTable { edges: edges.len(), profiles: m.profiles.len() });
         }
         let mut edge_profiles = BTreeMap::new();
         for (&(s, e), p) in edges.iter().zip(&m.profiles) {
             let Some(p) = p else { continue };
-            let key = (s.min(e), s.max(e));
+            let key = MeshEdge::new(node(s), node(e));
             let p = match s.cmp(&e) {
                 std::cmp::Ordering::Less => p.clone(),
                 std::cmp::Ordering::Greater => p.reversed(),
-                std::cmp::Ordering::Equal => return Err(RefineError::ProfileOnMissingEdge { a: s, b: e }),
+                std::cmp::Ordering::Equal => return Err(RefineError::ProfileOnMissingEdge { a: key.a, b: key.b }),
             };
             if edge_profiles.insert(key, p).is_some() {
-                return Err(RefineError::Profile { a: key.0, b: key.1, reason: "two profiles on one edge".into() });
+                return Err(RefineError::Profile { a: key.a, b: key.b, reason: "two profiles on one edge".into() });
             }
         }
         let mesh = Self {
-            positions: m.positions.clone(),
-            triangles: m.triangles.clone(),
-            fixed: vec![true; m.positions.len()],
+            positions: m.positions.iter().copied().collect(),
+            triangles: m.triangles.iter().map(|t| t.map(node)).collect(),
+            fixed: TiVec::from(vec![true; m.positions.len()]),
             edge_profiles,
         };
         Topology::of(&mesh)?;
@@ -354,13 +356,11 @@ impl RefineMesh {
     }
 }
 
-/// The undirected edges of `triangles`, keyed `(min, max)`, ascending: the order in which
+/// The undirected edges of `triangles`, ascending: the order in which
 /// [`split`] numbers the new vertices (`n_old + k` for the `k`-th). Ids are not checked.
-pub fn edge_keys(triangles: &[[u32; 3]]) -> Vec<(u32, u32)> {
-    let mut keys: Vec<(u32, u32)> = triangles
-        .iter()
-        .flat_map(|t| (0..3).map(move |k| (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3]))))
-        .collect();
+pub fn edge_keys(triangles: &TiSlice<FaceId, [VertexId; 3]>) -> Vec<MeshEdge> {
+    let mut keys: Vec<MeshEdge> =
+        triangles.iter().flat_map(|t| (0..3).map(move |k| MeshEdge::new(t[k], t[(k + 1) % 3]))).collect();
     keys.sort_unstable();
     keys.dedup();
     keys
@@ -387,7 +387,7 @@ pub fn split_with_boundary(mesh: &RefineMesh, butterfly: bool) -> Result<RefineM
 }
 
 /// The vertex one split put on each edge `(a, b)`, `a < b`: one level of a [`Lineage`].
-type Midpoints = BTreeMap<(u32, u32), u32>;
+type Midpoints = BTreeMap<MeshEdge, VertexId>;
 
 /// [`split_with_boundary`], with the vertex it put on each edge.
 fn split_level(mesh: &RefineMesh, butterfly: bool) -> Result<(RefineMesh, Midpoints), RefineError> {
@@ -404,28 +404,30 @@ fn split_level(mesh: &RefineMesh, butterfly: bool) -> Result<(RefineMesh, Midpoi
     let mut edge_profiles = BTreeMap::new();
     let mut new_id = BTreeMap::new();
     let p = &mesh.positions;
-    for (k, (&(a, b), edge)) in topo.edges.iter().enumerate() {
-        let m = (n_old + k) as u32;
-        new_id.insert((a, b), m);
-        if let Some(profile) = mesh.edge_profiles.get(&(a, b)) {
+    for (k, (&key, edge)) in topo.edges.iter().enumerate() {
+        let m = VertexId::from(n_old + k);
+        let MeshEdge { a, b } = key;
+        new_id.insert(key, m);
+        if let Some(profile) = mesh.edge_profiles.get(&key) {
             let (front, back) = profile.split_half();
             positions.push(front.end());
             fixed.push(true);
-            edge_profiles.insert((b, m), back.reversed());
-            edge_profiles.insert((a, m), front);
+            // m is above a and b: a profile keyed (b, m) runs from b to m
+            edge_profiles.insert(MeshEdge { a: b, b: m }, back.reversed());
+            edge_profiles.insert(MeshEdge { a, b: m }, front);
         } else if edge.faces == 1 && butterfly {
             let (x, y) = (edge.tail, edge.head);
-            let before = topo.prev[x as usize].map(|v| p[v as usize]);
-            let after = topo.next[y as usize].map(|v| p[v as usize]);
-            positions.push(boundary_point(before, p[x as usize], p[y as usize], after));
+            let before = topo.prev[x].map(|v| p[v]);
+            let after = topo.next[y].map(|v| p[v]);
+            positions.push(boundary_point(before, p[x], p[y], after));
             fixed.push(true);
         } else {
-            positions.push(0.5 * (p[a as usize] + p[b as usize]));
+            positions.push(0.5 * (p[a] + p[b]));
             fixed.push(false);
         }
     }
-    let mid = |a: u32, b: u32| new_id.get(&(a.min(b), a.max(b))).copied().unwrap_or(a);
-    let mut triangles = Vec::with_capacity(4 * mesh.triangles.len());
+    let mid = |a: VertexId, b: VertexId| new_id.get(&MeshEdge::new(a, b)).copied().unwrap_or(a);
+    let mut triangles = TiVec::with_capacity(4 * mesh.triangles.len());
     for &[a, b, c] in &mesh.triangles {
         let (ab, bc, ca) = (mid(a, b), mid(b, c), mid(c, a));
         triangles.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
@@ -450,7 +452,7 @@ fn boundary_point(before: Option<DVec3>, x: DVec3, y: DVec3, after: Option<DVec3
 /// # Errors
 /// Any violated precondition (module docs), as a [`RefineError`].
 pub fn fair(mesh: &mut RefineMesh, opts: &RefineOptions) -> Result<LevelReport, RefineError> {
-    fair_level(mesh, opts, 0, &mut |_: &mut [DVec3], _: &mut [bool]| {})
+    fair_level(mesh, opts, 0, &mut |_: &mut TiSlice<VertexId, DVec3>, _: &mut TiSlice<VertexId, bool>| {})
 }
 
 /// `opts.levels` × (split with the boundary rule, fairing) of `coarse` (module docs).
@@ -463,7 +465,7 @@ pub fn fair(mesh: &mut RefineMesh, opts: &RefineOptions) -> Result<LevelReport, 
 /// # Errors
 /// Any violated precondition (module docs), as a [`RefineError`]; a non-finite position
 /// left by the hook as [`RefineError::NonFinitePosition`].
-pub fn refine<F: FnMut(&mut [DVec3], &mut [bool])>(
+pub fn refine<F: FnMut(&mut TiSlice<VertexId, DVec3>, &mut TiSlice<VertexId, bool>)>(
     coarse: RefineMesh,
     opts: &RefineOptions,
     mut after_sweep: F,
@@ -497,21 +499,22 @@ pub fn relax_tangentially(mesh: &mut RefineMesh, sweeps: usize, lambda: f64) -> 
     let before = worst_quality(mesh);
     let n = mesh.positions.len();
     for _ in 0..sweeps {
-        let mut normal = vec![DVec3::ZERO; n];
+        let mut normal: TiVec<VertexId, DVec3> = TiVec::from(vec![DVec3::ZERO; n]);
         for t in &mesh.triangles {
-            let [a, b, c] = t.map(|v| mesh.positions[v as usize]);
+            let [a, b, c] = t.map(|v| mesh.positions[v]);
             let w = (b - a).cross(c - a);
             for &v in t {
-                normal[v as usize] += w;
+                normal[v] += w;
             }
         }
-        let next: Vec<DVec3> = (0..n)
-            .map(|i| {
-                let p = mesh.positions[i];
+        let next: TiVec<VertexId, DVec3> = mesh
+            .positions
+            .iter_enumerated()
+            .map(|(i, &p)| {
                 if mesh.fixed[i] || ring[i].is_empty() {
                     return p;
                 }
-                let u = ring[i].iter().map(|&k| mesh.positions[k as usize]).sum::<DVec3>() / ring[i].len() as f64 - p;
+                let u = ring[i].iter().map(|&k| mesh.positions[k]).sum::<DVec3>() / ring[i].len() as f64 - p;
                 let nv = normal[i].normalize_or_zero();
                 p + lambda * (u - u.dot(nv) * nv)
             })
@@ -526,7 +529,7 @@ pub fn worst_quality(mesh: &RefineMesh) -> f64 {
     mesh.triangles
         .iter()
         .map(|t| {
-            let [a, b, c] = t.map(|v| mesh.positions[v as usize]);
+            let [a, b, c] = t.map(|v| mesh.positions[v]);
             let l = (b - a).length_squared() + (c - b).length_squared() + (a - c).length_squared();
             if l > 0.0 {
                 2.0 * 3f64.sqrt() * (b - a).cross(c - a).length() / l
@@ -538,7 +541,7 @@ pub fn worst_quality(mesh: &RefineMesh) -> f64 {
 }
 
 /// Solves `U²(v) = 0` for the free vertices with `opts.solver` (module docs).
-fn fair_level<F: FnMut(&mut [DVec3], &mut [bool])>(
+fn fair_level<F: FnMut(&mut TiSlice<VertexId, DVec3>, &mut TiSlice<VertexId, bool>)>(
     mesh: &mut RefineMesh,
     opts: &RefineOptions,
     level: usize,
@@ -546,13 +549,13 @@ fn fair_level<F: FnMut(&mut [DVec3], &mut [bool])>(
 ) -> Result<LevelReport, RefineError> {
     let ring = Topology::of(mesh)?.neighbours;
     // ν of Eq. 12: 1 + (1/n_i) Σ_k 1/n_{i,k}, the coefficient of v_i in U²(v_i)
-    let nu: Vec<f64> = ring
+    let nu: TiVec<VertexId, f64> = ring
         .iter()
         .map(|r| {
             if r.is_empty() {
                 0.0
             } else {
-                1.0 + r.iter().map(|&k| 1.0 / ring[k as usize].len() as f64).sum::<f64>() / r.len() as f64
+                1.0 + r.iter().map(|&k| 1.0 / ring[k].len() as f64).sum::<f64>() / r.len() as f64
             }
         })
         .collect();
@@ -565,14 +568,8 @@ fn fair_level<F: FnMut(&mut [DVec3], &mut [bool])>(
         converged: false,
         held: 0,
     };
-    let pinned: Vec<(usize, DVec3)> = mesh
-        .fixed
-        .iter()
-        .zip(&mesh.positions)
-        .enumerate()
-        .filter(|(_, (f, _))| **f)
-        .map(|(i, (_, &p))| (i, p))
-        .collect();
+    let pinned: Vec<(VertexId, DVec3)> =
+        mesh.fixed.iter_enumerated().filter(|(_, &f)| f).map(|(i, _)| (i, mesh.positions[i])).collect();
     let mut system = System {
         ring: &ring,
         nu_all: &nu,
@@ -594,8 +591,8 @@ fn fair_level<F: FnMut(&mut [DVec3], &mut [bool])>(
         FairingSolver::ConjugateGradient => system.conjugate_gradient(pos, opts, &mut report),
     }
     report.held = system.held.iter().zip(&mesh.fixed).filter(|(h, f)| **h && !**f).count();
-    if let Some(v) = pos.iter().position(|p| !p.is_finite()) {
-        return Err(RefineError::NonFinitePosition { vertex: v as u32 });
+    if let Some(v) = pos.position(|p| !p.is_finite()) {
+        return Err(RefineError::NonFinitePosition { vertex: v });
     }
     Ok(report)
 }
@@ -603,42 +600,43 @@ fn fair_level<F: FnMut(&mut [DVec3], &mut [bool])>(
 /// The fairing system of one level: rows `U²(v_i) = 0` of the free vertices.
 struct System<'a, F> {
     /// Sorted 1-ring of every vertex.
-    ring: &'a [Vec<u32>],
+    ring: &'a TiSlice<VertexId, Vec<VertexId>>,
     /// `ν_i` of Eq. 12 per vertex (0 for an empty ring).
-    nu_all: &'a [f64],
+    nu_all: &'a TiSlice<VertexId, f64>,
     /// Free vertices with a non-empty ring, ascending: neither fixed nor held.
-    free: Vec<usize>,
+    free: Vec<VertexId>,
     /// `ν_i` per free vertex.
     nu: Vec<f64>,
     /// Fixed or held by the hook, per vertex; what the hook sees and may set.
-    held: Vec<bool>,
+    held: TiVec<VertexId, bool>,
     /// Length the updates are measured against (bounding-box diagonal, or 1).
     scale: f64,
     /// Fixed vertices and their positions, restored after the hook.
-    pinned: &'a [(usize, DVec3)],
+    pinned: &'a [(VertexId, DVec3)],
     /// Called after every sweep / iteration.
     hook: &'a mut F,
 }
 
-impl<F: FnMut(&mut [DVec3], &mut [bool])> System<'_, F> {
+impl<F: FnMut(&mut TiSlice<VertexId, DVec3>, &mut TiSlice<VertexId, bool>)> System<'_, F> {
     /// The free vertices (neither fixed nor held, with a ring) and their `ν`.
     fn collect_free(&mut self) {
-        self.free = (0..self.held.len()).filter(|&i| !self.held[i] && !self.ring[i].is_empty()).collect();
+        self.free =
+            self.held.iter_enumerated().filter(|&(i, &h)| !h && !self.ring[i].is_empty()).map(|(i, _)| i).collect();
         self.nu = self.free.iter().map(|&i| self.nu_all[i]).collect();
     }
 
     /// `U(v_k)` (Eq. 10).
-    fn umbrella(&self, pos: &[DVec3], k: usize) -> DVec3 {
+    fn umbrella(&self, pos: &TiSlice<VertexId, DVec3>, k: VertexId) -> DVec3 {
         let ring = &self.ring[k];
         if ring.is_empty() {
             return DVec3::ZERO;
         }
-        ring.iter().map(|&j| pos[j as usize]).sum::<DVec3>() / ring.len() as f64 - pos[k]
+        ring.iter().map(|&j| pos[j]).sum::<DVec3>() / ring.len() as f64 - pos[k]
     }
 
     /// Runs the hook, restores the fixed vertices and drops newly held vertices from
     /// the free set; whether the system changed (a free vertex moved or was held).
-    fn after_sweep(&mut self, pos: &mut [DVec3]) -> bool {
+    fn after_sweep(&mut self, pos: &mut TiSlice<VertexId, DVec3>) -> bool {
         let before: Vec<DVec3> = self.free.iter().map(|&i| pos[i]).collect();
         (self.hook)(pos, &mut self.held);
         for &(i, p) in self.pinned {
@@ -654,12 +652,12 @@ impl<F: FnMut(&mut [DVec3], &mut [bool])> System<'_, F> {
     }
 
     /// Eq. 12 for every free vertex in ascending id, in place, per sweep.
-    fn gauss_seidel(&mut self, pos: &mut [DVec3], opts: &RefineOptions, report: &mut LevelReport) {
+    fn gauss_seidel(&mut self, pos: &mut TiSlice<VertexId, DVec3>, opts: &RefineOptions, report: &mut LevelReport) {
         while report.fairing_sweeps < opts.max_sweeps {
             let mut largest = 0.0_f64;
             for (&i, &nu_i) in self.free.iter().zip(&self.nu) {
                 let ring = &self.ring[i];
-                let mean = ring.iter().map(|&k| self.umbrella(pos, k as usize)).sum::<DVec3>() / ring.len() as f64;
+                let mean = ring.iter().map(|&k| self.umbrella(pos, k)).sum::<DVec3>() / ring.len() as f64;
                 let step = (mean - self.umbrella(pos, i)) / nu_i;
                 pos[i] -= step;
                 largest = largest.max(step.length());
@@ -676,12 +674,12 @@ impl<F: FnMut(&mut [DVec3], &mut [bool])> System<'_, F> {
 
     /// `n_i U²` of the field `q` at every free vertex, `(L D⁻¹ L q)_i`, into `out`
     /// (`u` is scratch for the umbrella of every vertex).
-    fn apply(&self, q: &[DVec3], u: &mut [DVec3], out: &mut [DVec3]) {
-        for (k, uk) in u.iter_mut().enumerate() {
+    fn apply(&self, q: &TiSlice<VertexId, DVec3>, u: &mut TiSlice<VertexId, DVec3>, out: &mut [DVec3]) {
+        for (k, uk) in u.iter_mut_enumerated() {
             *uk = self.umbrella(q, k);
         }
         for (o, &i) in out.iter_mut().zip(&self.free) {
-            *o = self.ring[i].iter().map(|&k| u[k as usize]).sum::<DVec3>() - self.ring[i].len() as f64 * u[i];
+            *o = self.ring[i].iter().map(|&k| u[k]).sum::<DVec3>() - self.ring[i].len() as f64 * u[i];
         }
     }
 
@@ -695,10 +693,15 @@ impl<F: FnMut(&mut [DVec3], &mut [bool])> System<'_, F> {
     /// Diagonally preconditioned conjugate gradients, the three coordinates as three
     /// independent systems; restarted from the true residual (of the current free set)
     /// when the hook moves or holds a free vertex, and before accepting convergence.
-    fn conjugate_gradient(&mut self, pos: &mut [DVec3], opts: &RefineOptions, report: &mut LevelReport) {
+    fn conjugate_gradient(
+        &mut self,
+        pos: &mut TiSlice<VertexId, DVec3>,
+        opts: &RefineOptions,
+        report: &mut LevelReport,
+    ) {
         let n = pos.len();
-        let mut u = vec![DVec3::ZERO; n];
-        let mut q = vec![DVec3::ZERO; n];
+        let mut u: TiVec<VertexId, DVec3> = TiVec::from(vec![DVec3::ZERO; n]);
+        let mut q: TiVec<VertexId, DVec3> = TiVec::from(vec![DVec3::ZERO; n]);
         let (mut r, mut z, mut p, mut ap) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         let mut restart = true;
         let mut rz = DVec3::ZERO;
@@ -765,7 +768,7 @@ fn ratio(a: DVec3, b: DVec3) -> DVec3 {
 }
 
 /// Length of the diagonal of the axis-aligned bounding box (0 for no points).
-fn bounding_diagonal(points: &[DVec3]) -> f64 {
+fn bounding_diagonal(points: &TiSlice<VertexId, DVec3>) -> f64 {
     let Some(&first) = points.first() else { return 0.0 };
     let (lo, hi) = points.iter().fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p)));
     lo.distance(hi)
@@ -777,20 +780,20 @@ fn bounding_diagonal(points: &[DVec3]) -> f64 {
 #[derive(Debug, Clone, Copy)]
 struct EdgeUse {
     faces: usize,
-    tail: u32,
-    head: u32,
+    tail: VertexId,
+    head: VertexId,
 }
 
 /// Adjacency of a validated [`RefineMesh`].
 struct Topology {
-    /// Undirected edges keyed `(min, max)`.
-    edges: BTreeMap<(u32, u32), EdgeUse>,
+    /// Undirected edges.
+    edges: BTreeMap<MeshEdge, EdgeUse>,
     /// Sorted 1-ring of every vertex.
-    neighbours: Vec<Vec<u32>>,
+    neighbours: TiVec<VertexId, Vec<VertexId>>,
     /// The unique boundary successor (head of the one boundary half-edge leaving the vertex).
-    next: Vec<Option<u32>>,
+    next: TiVec<VertexId, Option<VertexId>>,
     /// The unique boundary predecessor.
-    prev: Vec<Option<u32>>,
+    prev: TiVec<VertexId, Option<VertexId>>,
 }
 
 impl Topology {
@@ -800,13 +803,13 @@ impl Topology {
         if mesh.fixed.len() != n {
             return Err(RefineError::FixedFlags { vertices: n, flags: mesh.fixed.len() });
         }
-        if let Some(v) = mesh.positions.iter().position(|p| !p.is_finite()) {
-            return Err(RefineError::NonFinitePosition { vertex: v as u32 });
+        if let Some(v) = mesh.positions.position(|p| !p.is_finite()) {
+            return Err(RefineError::NonFinitePosition { vertex: v });
         }
-        for (face, t) in mesh.triangles.iter().enumerate() {
+        for (face, t) in mesh.triangles.iter_enumerated() {
             for k in 0..3 {
                 let v = t[k];
-                if v as usize >= n {
+                if v.idx() >= n {
                     return Err(RefineError::IndexOutOfRange { face, vertex: v, count: n });
                 }
                 if t[(k + 1) % 3] == v {
@@ -815,25 +818,27 @@ impl Topology {
             }
         }
         let mut edges = BTreeMap::new();
-        let mut neighbours = vec![Vec::new(); n];
-        let (mut next, mut prev) = (vec![None; n], vec![None; n]);
-        let (mut out_count, mut in_count) = (vec![0usize; n], vec![0usize; n]);
-        for e in check_edge_uses(triangle_edge_uses(&mesh.triangles))? {
-            let (a, b) = (e.edge.a.0, e.edge.b.0);
+        let mut neighbours: TiVec<VertexId, Vec<VertexId>> = TiVec::from(vec![Vec::new(); n]);
+        let (mut next, mut prev): (TiVec<VertexId, _>, TiVec<VertexId, _>) =
+            (vec![None; n].into(), vec![None; n].into());
+        let (mut out_count, mut in_count): (TiVec<VertexId, usize>, TiVec<VertexId, usize>) =
+            (vec![0; n].into(), vec![0; n].into());
+        for e in check_edge_uses(triangle_edge_uses(&mesh.triangles.raw))? {
+            let MeshEdge { a, b } = e.edge;
             // the direction of the first face's use (the boundary's, on a boundary edge)
             let (tail, head) = if e.first.forward { (a, b) } else { (b, a) };
             let faces = 1 + usize::from(e.second.is_some());
-            edges.insert((a, b), EdgeUse { faces, tail, head });
-            neighbours[a as usize].push(b);
-            neighbours[b as usize].push(a);
+            edges.insert(e.edge, EdgeUse { faces, tail, head });
+            neighbours[a].push(b);
+            neighbours[b].push(a);
             if faces == 1 {
-                next[tail as usize] = Some(head);
-                out_count[tail as usize] += 1;
-                prev[head as usize] = Some(tail);
-                in_count[head as usize] += 1;
+                next[tail] = Some(head);
+                out_count[tail] += 1;
+                prev[head] = Some(tail);
+                in_count[head] += 1;
             }
         }
-        for v in 0..n {
+        for v in (0..n).map(VertexId::from) {
             neighbours[v].sort_unstable();
             if out_count[v] != 1 {
                 next[v] = None;
@@ -842,11 +847,12 @@ impl Topology {
                 prev[v] = None;
             }
         }
-        for (&(a, b), profile) in &mesh.edge_profiles {
-            if !edges.contains_key(&(a, b)) {
+        for (&key, profile) in &mesh.edge_profiles {
+            let MeshEdge { a, b } = key;
+            if !edges.contains_key(&key) {
                 return Err(RefineError::ProfileOnMissingEdge { a, b });
             }
-            if profile.start() != mesh.positions[a as usize] || profile.end() != mesh.positions[b as usize] {
+            if profile.start() != mesh.positions[a] || profile.end() != mesh.positions[b] {
                 return Err(RefineError::Profile { a, b, reason: "its ends are not the edge's vertices".into() });
             }
         }
@@ -864,14 +870,24 @@ mod tests {
 
     use super::*;
 
+    /// Plain test ids as the mesh's typed ones.
+    fn v(i: u32) -> VertexId {
+        VertexId(i)
+    }
+
+    /// Test triangles in typed ids.
+    fn tris(t: &[[u32; 3]]) -> TiVec<FaceId, [VertexId; 3]> {
+        t.iter().map(|f| f.map(VertexId)).collect()
+    }
+
     /// A regular icosahedron (20 faces, outward).
     fn icosahedron() -> RefineMesh {
         let m = crate::geom::mesh::TriMesh::icosahedron();
         let n = m.vertex_count();
         RefineMesh {
-            positions: m.positions().to_vec(),
-            triangles: m.triangles().iter().map(|t| t.map(|v| v.0)).collect(),
-            fixed: vec![true; n],
+            positions: m.positions().to_vec().into(),
+            triangles: m.triangles().to_vec().into(),
+            fixed: vec![true; n].into(),
             edge_profiles: BTreeMap::new(),
         }
     }
@@ -894,7 +910,12 @@ mod tests {
                 triangles.push([v, v + k + 1, v + k]);
             }
         }
-        RefineMesh { positions, triangles, fixed, edge_profiles: BTreeMap::new() }
+        RefineMesh {
+            positions: positions.into(),
+            triangles: tris(&triangles),
+            fixed: fixed.into(),
+            edge_profiles: BTreeMap::new(),
+        }
     }
 
     /// Nodes around the tube of [`tube`].
@@ -919,17 +940,22 @@ mod tests {
             triangles.push([i, i + AROUND, j + AROUND]);
             triangles.push([i, j + AROUND, j]);
         }
-        RefineMesh { positions, triangles, fixed: vec![true; 16], edge_profiles: BTreeMap::new() }
+        RefineMesh {
+            positions: positions.into(),
+            triangles: tris(&triangles),
+            fixed: vec![true; 16].into(),
+            edge_profiles: BTreeMap::new(),
+        }
     }
 
     /// The boundary loop of `mesh` through vertex `start`, in boundary order.
-    fn boundary_loop(mesh: &RefineMesh, start: u32) -> Vec<u32> {
+    fn boundary_loop(mesh: &RefineMesh, start: VertexId) -> Vec<VertexId> {
         let topo = Topology::of(mesh).expect("valid mesh");
         let mut lp = vec![start];
-        let mut v = topo.next[start as usize].expect("boundary vertex");
+        let mut v = topo.next[start].expect("boundary vertex");
         while v != start {
             lp.push(v);
-            v = topo.next[v as usize].expect("manifold boundary");
+            v = topo.next[v].expect("manifold boundary");
         }
         lp
     }
@@ -955,15 +981,12 @@ mod tests {
         })
     }
 
-    fn no_hook(_: &mut [DVec3], _: &mut [bool]) {}
+    fn no_hook(_: &mut TiSlice<VertexId, DVec3>, _: &mut TiSlice<VertexId, bool>) {}
 
     /// Total area of the triangles.
     fn area(mesh: &RefineMesh) -> f64 {
         let p = &mesh.positions;
-        mesh.triangles
-            .iter()
-            .map(|t| 0.5 * (p[t[1] as usize] - p[t[0] as usize]).cross(p[t[2] as usize] - p[t[0] as usize]).length())
-            .sum()
+        mesh.triangles.iter().map(|t| 0.5 * (p[t[1]] - p[t[0]]).cross(p[t[2]] - p[t[0]]).length()).sum()
     }
 
     #[test]
@@ -991,19 +1014,19 @@ mod tests {
         let fine = split(&mesh).expect("split");
         let keys = edge_keys(&mesh.triangles);
         assert_eq!(fine.positions.len(), mesh.positions.len() + keys.len());
-        for (k, &(a, b)) in keys.iter().enumerate() {
-            let m = fine.positions[mesh.positions.len() + k];
-            assert_eq!(m, 0.5 * (mesh.positions[a as usize] + mesh.positions[b as usize]));
-            assert!(!fine.fixed[mesh.positions.len() + k]);
+        for (k, &MeshEdge { a, b }) in keys.iter().enumerate() {
+            let m = fine.positions.raw[mesh.positions.len() + k];
+            assert_eq!(m, 0.5 * (mesh.positions[a] + mesh.positions[b]));
+            assert!(!fine.fixed.raw[mesh.positions.len() + k]);
         }
         // every child keeps its parent's normal direction (flat split: parallel normals)
-        let normal = |m: &RefineMesh, t: [u32; 3]| {
-            let p = |v: u32| m.positions[v as usize];
+        let normal = |m: &RefineMesh, t: [VertexId; 3]| {
+            let p = |v: VertexId| m.positions[v];
             (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0]))
         };
         for (f, &t) in mesh.triangles.iter().enumerate() {
             for c in 0..4 {
-                let child = fine.triangles[4 * f + c];
+                let child = fine.triangles.raw[4 * f + c];
                 assert!(normal(&fine, child).dot(normal(&mesh, t)) > 0.0, "face {f} child {c}");
             }
         }
@@ -1043,25 +1066,25 @@ mod tests {
         let (coarse, profiles, edges) = skirt();
         let opts = RefineOptions::default();
         // which coarse edge every profiled edge descends from
-        let mut lineage: BTreeMap<(u32, u32), usize> = BTreeMap::new();
+        let mut lineage: BTreeMap<MeshEdge, usize> = BTreeMap::new();
         for (e, &(s, t)) in edges.iter().enumerate() {
             if profiles[e].is_some() {
-                lineage.insert((s.min(t), s.max(t)), e);
+                lineage.insert(MeshEdge::new(v(s), v(t)), e);
             }
         }
-        let mut origin: Vec<(u32, usize)> = Vec::new();
+        let mut origin: Vec<(VertexId, usize)> = Vec::new();
         let mut mesh = coarse.clone();
         for level in 1..=opts.levels {
-            let n_old = mesh.positions.len() as u32;
+            let n_old = mesh.positions.len();
             let keys = edge_keys(&mesh.triangles);
             mesh = split_with_boundary(&mesh, opts.butterfly_boundary).expect("split");
             let mut next = BTreeMap::new();
             for (k, key) in keys.iter().enumerate() {
                 if let Some(&e) = lineage.get(key) {
-                    let m = n_old + k as u32;
-                    assert!(mesh.fixed[m as usize]);
-                    next.insert((key.0, m), e);
-                    next.insert((key.1, m), e);
+                    let m = VertexId::from(n_old + k);
+                    assert!(mesh.fixed[m]);
+                    next.insert(MeshEdge::new(key.a, m), e);
+                    next.insert(MeshEdge::new(key.b, m), e);
                     origin.push((m, e));
                 }
             }
@@ -1072,9 +1095,7 @@ mod tests {
         let diagonal = bounding_diagonal(&mesh.positions);
         let worst = origin
             .iter()
-            .map(|&(v, e)| {
-                profiles[e].as_ref().map_or(f64::INFINITY, |c| c.closest_point(mesh.positions[v as usize]).distance)
-            })
+            .map(|&(v, e)| profiles[e].as_ref().map_or(f64::INFINITY, |c| c.closest_point(mesh.positions[v]).distance))
             .fold(0.0, f64::max);
         println!(
             "profile fidelity: {} vertices on {} coarse profiles, max distance {worst:.3e} m = {:.3e} × diagonal",
@@ -1124,12 +1145,12 @@ mod tests {
 
     /// Figures of one boundary ring of the refined tube: (length, coarse polygon length,
     /// largest distance out of the ring's plane, mean radius / RADIUS).
-    fn ring_figures(mesh: &RefineMesh, start: u32, y: f64) -> (f64, f64, f64, f64) {
+    fn ring_figures(mesh: &RefineMesh, start: VertexId, y: f64) -> (f64, f64, f64, f64) {
         let lp = boundary_loop(mesh, start);
-        let pts: Vec<DVec3> = lp.iter().map(|&v| mesh.positions[v as usize]).collect();
-        let coarse: Vec<u32> = lp.iter().copied().filter(|&v| v < 2 * AROUND).collect();
+        let pts: Vec<DVec3> = lp.iter().map(|&v| mesh.positions[v]).collect();
+        let coarse: Vec<VertexId> = lp.iter().copied().filter(|&v| v.0 < 2 * AROUND).collect();
         assert_eq!(coarse.len(), AROUND as usize, "the boundary passes through every coarse node");
-        let coarse_pts: Vec<DVec3> = coarse.iter().map(|&v| mesh.positions[v as usize]).collect();
+        let coarse_pts: Vec<DVec3> = coarse.iter().map(|&v| mesh.positions[v]).collect();
         let sag = pts.iter().map(|p| (p.y - y).abs()).fold(0.0, f64::max);
         let radius = pts.iter().map(|p| p.x.hypot(p.z)).sum::<f64>() / pts.len() as f64 / RADIUS;
         (loop_length(&pts), loop_length(&coarse_pts), sag, radius)
@@ -1146,7 +1167,7 @@ mod tests {
                 refine(coarse.clone(), &opts, no_hook).expect("refine tube");
             assert!(reports.iter().all(|r| r.converged));
             let mut sags = Vec::new();
-            for (start, y) in [(0, 0.0), (AROUND, HEIGHT)] {
+            for (start, y) in [(v(0), 0.0), (v(AROUND), HEIGHT)] {
                 let (len, coarse_len, sag, radius) = ring_figures(&fine, start, y);
                 println!(
                     "tube, butterfly {butterfly:5}: ring y = {y} m: length {len:.4} m (coarse polygon {coarse_len:.4}, \
@@ -1178,11 +1199,11 @@ mod tests {
         let coarse = tube();
         let fine = split_with_boundary(&coarse, true).expect("split");
         let keys = edge_keys(&coarse.triangles);
-        let p = |v: u32| coarse.positions[v as usize];
+        let p = |i: u32| coarse.positions[v(i)];
         // boundary edge 0–1 of the ring y = 0, whose polygon runs … 2 → 1 → 0 → 7 … or the reverse
-        let k = keys.iter().position(|&e| e == (0, 1)).expect("edge 0–1");
-        let m = fine.positions[coarse.positions.len() + k];
-        assert!(fine.fixed[coarse.positions.len() + k]);
+        let k = keys.iter().position(|&e| e == MeshEdge::new(v(0), v(1))).expect("edge 0–1");
+        let m = fine.positions.raw[coarse.positions.len() + k];
+        assert!(fine.fixed.raw[coarse.positions.len() + k]);
         let expected = (9.0 * (p(0) + p(1)) - p(7) - p(2)) / 16.0;
         assert!(m.distance(expected) <= 1e-15, "{m} vs {expected}");
         // the straight-line case is the midpoint, the chain-end rules reproduce quadratics
@@ -1201,7 +1222,7 @@ mod tests {
         let opts = RefineOptions::default();
         let mut calls = 0;
         let Refined { mesh: fine, levels: reports, .. } =
-            refine(mesh.clone(), &opts, |pos: &mut [DVec3], fixed: &mut [bool]| {
+            refine(mesh.clone(), &opts, |pos: &mut TiSlice<VertexId, DVec3>, fixed: &mut TiSlice<VertexId, bool>| {
                 calls += 1;
                 for (p, &f) in pos.iter_mut().zip(fixed.iter()) {
                     if f {
@@ -1223,14 +1244,14 @@ mod tests {
         let (mesh, _, _) = skirt();
         let opts = RefineOptions::default();
         let mid = mesh.positions.iter().map(|p| p.y).sum::<f64>() / mesh.positions.len() as f64;
-        let mut first_held: Vec<Option<DVec3>> = Vec::new();
+        let mut first_held: TiVec<VertexId, Option<DVec3>> = TiVec::new();
         let mut moved_after_hold = 0usize;
         let Refined { mesh: _, levels: reports, .. } =
-            refine(mesh.clone(), &opts, |pos: &mut [DVec3], held: &mut [bool]| {
+            refine(mesh.clone(), &opts, |pos: &mut TiSlice<VertexId, DVec3>, held: &mut TiSlice<VertexId, bool>| {
                 if first_held.len() != pos.len() {
-                    first_held = vec![None; pos.len()];
+                    first_held = vec![None; pos.len()].into();
                 }
-                for (i, p) in pos.iter().enumerate() {
+                for (i, p) in pos.iter_enumerated() {
                     match first_held[i] {
                         Some(q) if q != *p => moved_after_hold += 1,
                         Some(_) => {}
@@ -1253,46 +1274,48 @@ mod tests {
         // three triangles on the edge 0–1
         let positions = vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z, DVec3::NEG_Y];
         let bad = RefineMesh {
-            positions: positions.clone(),
-            triangles: vec![[0, 1, 2], [1, 0, 3], [0, 1, 4]],
-            fixed: vec![true; 5],
+            positions: positions.clone().into(),
+            triangles: tris(&[[0, 1, 2], [1, 0, 3], [0, 1, 4]]),
+            fixed: vec![true; 5].into(),
             edge_profiles: BTreeMap::new(),
         };
         let err = split(&bad).expect_err("non-manifold");
-        assert_eq!(err, RefineError::Topology(TopologyError::NonManifoldEdge { edge: MeshEdge::new(0, 1), faces: 3 }));
+        let e01 = MeshEdge::new(v(0), v(1));
+        assert_eq!(err, RefineError::Topology(TopologyError::NonManifoldEdge { edge: e01, faces: 3 }));
         assert!(err.to_string().contains("0–1"), "{err}");
         assert_eq!(refine(bad.clone(), &RefineOptions::default(), no_hook).unwrap_err(), err);
         assert_eq!(fair(&mut bad.clone(), &RefineOptions::default()).unwrap_err(), err);
-        let mut m = RefineMesh { triangles: vec![[0, 1, 2], [0, 1, 3]], ..bad.clone() };
+        let mut m = RefineMesh { triangles: tris(&[[0, 1, 2], [0, 1, 3]]), ..bad.clone() };
         assert!(matches!(
             split(&m).unwrap_err(),
-            RefineError::Topology(TopologyError::InconsistentOrientation { edge, .. }) if edge == MeshEdge::new(0, 1)
+            RefineError::Topology(TopologyError::InconsistentOrientation { edge, .. }) if edge == e01
         ));
-        m.triangles = vec![[0, 1, 9]];
-        assert_eq!(split(&m).unwrap_err(), RefineError::IndexOutOfRange { face: 0, vertex: 9, count: 5 });
-        m.triangles = vec![[0, 1, 1]];
-        assert_eq!(split(&m).unwrap_err(), RefineError::DegenerateFace { face: 0, vertex: 1 });
-        m.triangles = vec![[0, 1, 2]];
-        m.positions[2].y = f64::NAN;
-        assert_eq!(split(&m).unwrap_err(), RefineError::NonFinitePosition { vertex: 2 });
-        m.positions = positions;
+        m.triangles = tris(&[[0, 1, 9]]);
+        assert_eq!(split(&m).unwrap_err(), RefineError::IndexOutOfRange { face: FaceId(0), vertex: v(9), count: 5 });
+        m.triangles = tris(&[[0, 1, 1]]);
+        assert_eq!(split(&m).unwrap_err(), RefineError::DegenerateFace { face: FaceId(0), vertex: v(1) });
+        m.triangles = tris(&[[0, 1, 2]]);
+        m.positions[v(2)].y = f64::NAN;
+        assert_eq!(split(&m).unwrap_err(), RefineError::NonFinitePosition { vertex: v(2) });
+        m.positions = positions.into();
         m.fixed.pop();
         assert_eq!(split(&m).unwrap_err(), RefineError::FixedFlags { vertices: 5, flags: 4 });
         m.fixed.push(true);
         let profile = Profile::new(vec![DVec3::ZERO, DVec3::new(0.5, 0.1, 0.0), DVec3::X]).expect("profile");
-        m.edge_profiles.insert((1, 0), profile.clone());
-        assert_eq!(split(&m).unwrap_err(), RefineError::ProfileOnMissingEdge { a: 1, b: 0 });
+        // a key built out of order (the fields are public) names no edge
+        m.edge_profiles.insert(MeshEdge { a: v(1), b: v(0) }, profile.clone());
+        assert_eq!(split(&m).unwrap_err(), RefineError::ProfileOnMissingEdge { a: v(1), b: v(0) });
         m.edge_profiles.clear();
-        m.edge_profiles.insert((0, 2), profile.clone());
-        assert!(matches!(split(&m).unwrap_err(), RefineError::Profile { a: 0, b: 2, .. }));
+        m.edge_profiles.insert(MeshEdge::new(v(0), v(2)), profile.clone());
+        assert!(matches!(split(&m).unwrap_err(), RefineError::Profile { a: VertexId(0), b: VertexId(2), .. }));
         m.edge_profiles.clear();
-        m.edge_profiles.insert((0, 1), profile.clone());
+        m.edge_profiles.insert(e01, profile.clone());
         let fine = split(&m).expect("profiled edge");
-        assert_eq!(fine.positions[5], profile.eval(0.5));
-        assert!(fine.fixed[5]);
+        assert_eq!(fine.positions[v(5)], profile.eval(0.5));
+        assert!(fine.fixed[v(5)]);
         // from_coarse: table length, a profile given end → start is reversed
         let coarse = CoarseMesh {
-            positions: m.positions.clone(),
+            positions: m.positions.raw.clone(),
             triangles: vec![[0, 1, 2]],
             profiles: vec![Some(profile.clone()), None, None],
             hung: vec![],
@@ -1302,11 +1325,11 @@ mod tests {
             RefineError::EdgeTable { edges: 1, profiles: 3 }
         );
         let ok = RefineMesh::from_coarse(&coarse, &[(0, 1), (1, 2), (0, 2)]).expect("coarse");
-        assert_eq!(ok.edge_profiles[&(0, 1)], profile);
+        assert_eq!(ok.edge_profiles[&e01], profile);
         let flipped = Profile::new(vec![DVec3::X, DVec3::new(0.5, 0.1, 0.0), DVec3::ZERO]).expect("profile");
         let coarse = CoarseMesh { profiles: vec![Some(flipped), None, None], ..coarse };
         let ok = RefineMesh::from_coarse(&coarse, &[(1, 0), (1, 2), (0, 2)]).expect("reversed");
-        let back = &ok.edge_profiles[&(0, 1)];
+        let back = &ok.edge_profiles[&e01];
         assert_eq!((back.start(), back.end()), (DVec3::ZERO, DVec3::X));
         assert!(back.eval(0.25).distance(profile.eval(0.25)) < 1e-12);
     }
@@ -1327,13 +1350,13 @@ mod tests {
             }
             let fine = split_with_boundary(&mesh, butterfly).expect("split");
             prop_assert_eq!(fine.triangles.len(), 4 * mesh.triangles.len());
-            prop_assert_eq!(&fine.positions[..25], &mesh.positions[..]);
-            prop_assert_eq!(&fine.fixed[..25], &mesh.fixed[..]);
+            prop_assert_eq!(&fine.positions.raw[..25], &mesh.positions.raw[..]);
+            prop_assert_eq!(&fine.fixed.raw[..25], &mesh.fixed.raw[..]);
             prop_assert!(Topology::of(&fine).is_ok());
             let mut faired = fine.clone();
             let report = fair(&mut faired, &RefineOptions::default()).expect("fair");
             prop_assert!(report.converged);
-            for (i, (a, b)) in fine.positions.iter().zip(&faired.positions).enumerate() {
+            for ((i, a), b) in fine.positions.iter_enumerated().zip(&faired.positions) {
                 if fine.fixed[i] {
                     prop_assert_eq!(a, b);
                 }
@@ -1346,8 +1369,8 @@ mod tests {
         ) {
             let mesh = RefineMesh {
                 positions: (0..6).map(|i| DVec3::new(i as f64, (i * i) as f64, 0.0)).collect(),
-                triangles: faces,
-                fixed: vec![false; 6],
+                triangles: tris(&faces),
+                fixed: vec![false; 6].into(),
                 edge_profiles: BTreeMap::new(),
             };
             let opts = RefineOptions { levels: 2, max_sweeps: 20, ..RefineOptions::default() };

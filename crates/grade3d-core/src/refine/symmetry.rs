@@ -45,9 +45,12 @@
 
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
+use typed_index_collections::{TiSlice, TiVec};
 
 use crate::body::feature::FeatureBody;
+use crate::geom::mesh::{FaceId, VertexId};
 use crate::geom::plane::Plane;
+use crate::refine::lineage::node_vertex;
 use crate::template::format::Template;
 
 /// Passes at most: where the asymmetry rivals the vertex spacing (small
@@ -81,7 +84,7 @@ pub struct SymmetryOptions {
 #[derive(Debug, Clone, Copy)]
 pub struct Topology<'a> {
     /// Triangles of the refined mesh.
-    pub triangles: &'a [[u32; 3]],
+    pub triangles: &'a TiSlice<FaceId, [VertexId; 3]>,
     /// The template nodes as decoded on the body (before any collision):
     /// vertices `0..nodes.len()` of the refined mesh.
     pub nodes: &'a [DVec3],
@@ -114,10 +117,10 @@ fn body_plane(body: &FeatureBody) -> Option<((DVec3, f64), f64)> {
 pub fn symmetrize(
     t: &Template,
     body: &FeatureBody,
-    positions: &[DVec3],
+    positions: &TiSlice<VertexId, DVec3>,
     topology: Option<Topology<'_>>,
     opts: &SymmetryOptions,
-) -> Option<Vec<DVec3>> {
+) -> Option<TiVec<VertexId, DVec3>> {
     if !opts.enabled || t.mirror_pairs.is_empty() || positions.is_empty() {
         return None;
     }
@@ -127,15 +130,14 @@ pub fn symmetrize(
     }
     let mirror = |p: DVec3| p - 2.0 * (n.dot(p) - d) * n;
     if let Some(partner) = topology.and_then(|top| partners_by_topology(top, positions, &mirror, opts)) {
-        let far = positions.iter().zip(&partner).map(|(&p, &w)| mirror(positions[w as usize]).distance(p));
+        let far = positions.iter().zip(&partner).map(|(&p, &w)| mirror(positions[w]).distance(p));
         if far.fold(0.0, f64::max) * 1e3 <= opts.pair_tolerance_mm {
-            return Some(
-                positions.iter().zip(&partner).map(|(&p, &w)| 0.5 * (p + mirror(positions[w as usize]))).collect(),
-            );
+            return Some(positions.iter().zip(&partner).map(|(&p, &w)| 0.5 * (p + mirror(positions[w]))).collect());
         }
     }
+    // nearest mirror images: a search over positions, in the positions' own order
     let tol2 = (opts.vertex_tolerance_mm * 1e-3).powi(2);
-    let mut out = positions.to_vec();
+    let mut out = positions.raw.to_vec();
     for _ in 0..SYMMETRY_PASSES {
         let nearest = |q: DVec3| -> (usize, f64) {
             out.iter()
@@ -157,22 +159,22 @@ pub fn symmetrize(
             break;
         }
     }
-    Some(out)
+    Some(out.into())
 }
 
 /// The mirror map of the refined mesh by topology (module docs), or `None`
 /// where the nodes do not pair or the connectivity is not mirrored.
 fn partners_by_topology(
     top: Topology<'_>,
-    positions: &[DVec3],
+    positions: &TiSlice<VertexId, DVec3>,
     mirror: &impl Fn(DVec3) -> DVec3,
     opts: &SymmetryOptions,
-) -> Option<Vec<u32>> {
+) -> Option<TiVec<VertexId, VertexId>> {
     let vertices = positions.len();
     if top.nodes.len() > vertices {
         return None;
     }
-    let mut partner: Vec<Option<u32>> = vec![None; vertices];
+    let mut partner: TiVec<VertexId, Option<VertexId>> = TiVec::from(vec![None; vertices]);
     let tol = opts.body_tolerance_mm * 1e-3;
     for (i, &p) in top.nodes.iter().enumerate() {
         let m = mirror(p);
@@ -185,35 +187,36 @@ fn partners_by_topology(
         if dist > tol {
             return None;
         }
-        partner[i] = Some(j as u32);
+        // nodes are the first vertices of the refined mesh
+        partner[node_vertex(i as u32)] = Some(node_vertex(j as u32));
     }
     // directed edge → the third corner of its triangle
-    let mut third: std::collections::HashMap<(u32, u32), u32> = std::collections::HashMap::new();
+    let mut third: std::collections::HashMap<(VertexId, VertexId), VertexId> = std::collections::HashMap::new();
     for &[a, b, c] in top.triangles {
-        if [a, b, c].iter().any(|&v| v as usize >= vertices) {
+        if [a, b, c].iter().any(|&v| v.idx() >= vertices) {
             return None;
         }
         third.insert((a, b), c);
         third.insert((b, c), a);
         third.insert((c, a), b);
     }
-    let mut next: Vec<Vec<u32>> = vec![Vec::new(); vertices];
+    let mut next: TiVec<VertexId, Vec<VertexId>> = TiVec::from(vec![Vec::new(); vertices]);
     for &(a, b) in third.keys() {
-        next[a as usize].push(b);
-        next[b as usize].push(a);
+        next[a].push(b);
+        next[b].push(a);
     }
     loop {
         let mut changed = false;
         for &[a, b, c] in top.triangles {
             for (x, y, z) in [(a, b, c), (b, c, a), (c, a, b)] {
-                let (Some(px), Some(py)) = (partner[x as usize], partner[y as usize]) else { continue };
+                let (Some(px), Some(py)) = (partner[x], partner[y]) else { continue };
                 // the mirror reverses orientation: x→y maps to m(y)→m(x)
                 let &mz = third.get(&(py, px))?;
-                match partner[z as usize] {
+                match partner[z] {
                     Some(known) if known != mz => return None,
                     Some(_) => {}
                     None => {
-                        partner[z as usize] = Some(mz);
+                        partner[z] = Some(mz);
                         changed = true;
                     }
                 }
@@ -225,27 +228,29 @@ fn partners_by_topology(
         // no triangle has two paired corners: pair one neighbour `u` of a paired
         // vertex `v` with the neighbour of m(v) nearest u's mirror image (a choice
         // among a handful of vertices 10–30 mm apart), and spread from that edge
-        let Some((u, v)) = (0..vertices).find_map(|v| {
-            partner[v]?;
-            next[v].iter().find(|&&u| partner[u as usize].is_none()).map(|&u| (u, v))
+        let Some((u, v)) = partner.iter_enumerated().find_map(|(v, pv)| {
+            pv.as_ref()?;
+            next[v].iter().find(|&&u| partner[u].is_none()).map(|&u| (u, v))
         }) else {
             break;
         };
-        let mv = partner[v]? as usize;
-        let target = mirror(positions[u as usize]);
-        let pick = next[mv].iter().copied().min_by(|&a, &b| {
-            positions[a as usize].distance(target).total_cmp(&positions[b as usize].distance(target))
-        })?;
-        partner[u as usize] = Some(pick);
+        let mv = partner[v]?;
+        let target = mirror(positions[u]);
+        let pick = next[mv]
+            .iter()
+            .copied()
+            .min_by(|&a, &b| positions[a].distance(target).total_cmp(&positions[b].distance(target)))?;
+        partner[u] = Some(pick);
     }
-    let partner: Vec<u32> = partner.into_iter().collect::<Option<Vec<u32>>>()?;
-    partner.iter().enumerate().all(|(v, &w)| partner[w as usize] as usize == v).then_some(partner)
+    let partner: TiVec<VertexId, VertexId> = partner.into_iter().collect::<Option<_>>()?;
+    partner.iter_enumerated().all(|(v, &w)| partner[w] == v).then_some(partner)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::template::library::{builtin, reference_body};
+    use typed_index_collections::TiVec;
 
     fn trousers() -> Template {
         builtin().unwrap().into_iter().find(|t| t.name == "trousers").unwrap()
@@ -265,7 +270,8 @@ mod tests {
         let mut positions: Vec<DVec3> = left.iter().copied().chain(left.iter().map(|&p| mirror(p))).collect();
         let planted = DVec3::new(0.001, -0.0015, 0.0005);
         positions[7] += planted;
-        let out = symmetrize(&trousers(), &body, &positions, None, &SymmetryOptions::default()).unwrap();
+        let positions: TiVec<VertexId, DVec3> = positions.into();
+        let out = symmetrize(&trousers(), &body, &positions, None, &SymmetryOptions::default()).unwrap().raw;
         let k = left.len();
         for v in 0..k {
             assert!(mirror(out[v]).distance(out[v + k]) < 1e-12, "vertex {v} and its partner mirror");
@@ -274,15 +280,15 @@ mod tests {
         assert!(out[7].distance(left[7] + 0.5 * planted) < 1e-12);
         assert!(out[7 + k].distance(mirror(left[7]) + 0.5 * (mirror(planted) - mirror(DVec3::ZERO))) < 1e-12);
         for v in (0..2 * k).filter(|&v| v != 7 && v != 7 + k) {
-            assert!(out[v].distance(positions[v]) < 1e-12, "vertex {v} was symmetric and stays");
+            assert!(out[v].distance(positions.raw[v]) < 1e-12, "vertex {v} was symmetric and stays");
         }
     }
 
     #[test]
     fn an_asymmetric_body_or_a_garment_without_partners_is_left_alone() {
         let mut body = reference_body().unwrap();
-        let positions = vec![DVec3::new(0.1, 1.0, 0.1), DVec3::new(-0.1, 1.0, 0.1)];
-        let far = vec![DVec3::new(0.1, 1.0, 0.1), DVec3::new(-0.3, 1.0, 0.1)];
+        let positions: TiVec<VertexId, DVec3> = vec![DVec3::new(0.1, 1.0, 0.1), DVec3::new(-0.1, 1.0, 0.1)].into();
+        let far: TiVec<VertexId, DVec3> = vec![DVec3::new(0.1, 1.0, 0.1), DVec3::new(-0.3, 1.0, 0.1)].into();
         let opts = SymmetryOptions::default();
         assert!(symmetrize(&trousers(), &body, &far, None, &opts).is_none(), "no partner within 5 mm");
         let mut skirt = trousers();
@@ -305,9 +311,9 @@ mod tests {
         cells.extend(
             (0..3).flat_map(|j| (0..5).map(move |i| (i, j))).filter(|c| ![(0, 0), (4, 0), (0, 2), (4, 2)].contains(c)),
         );
-        let id = |i: i32, j: i32| cells.iter().position(|&c| c == (i, j)).unwrap() as u32;
+        let id = |i: i32, j: i32| VertexId::from(cells.iter().position(|&c| c == (i, j)).unwrap());
         let at = |(i, j): (i32, i32)| d * n + n * (0.02 * f64::from(i - 2)) + DVec3::new(0.0, 0.02 * f64::from(j), 0.1);
-        let mut triangles = Vec::new();
+        let mut triangles: TiVec<FaceId, [VertexId; 3]> = TiVec::new();
         for j in 0..2 {
             for i in 0..4 {
                 let (p00, p10, p01, p11) = (id(i, j), id(i + 1, j), id(i, j + 1), id(i + 1, j + 1));
@@ -321,26 +327,26 @@ mod tests {
         let exact: Vec<DVec3> = cells.iter().map(|&c| at(c)).collect();
         let nodes = &exact[..4];
         // one interior vertex 9 mm off: no nearest partner within 5 mm
-        let mut positions = exact.clone();
-        let v = id(1, 1) as usize;
-        positions[v] += n * 0.009;
+        let mut positions: TiVec<VertexId, DVec3> = exact.clone().into();
+        let v = id(1, 1).idx();
+        positions.raw[v] += n * 0.009;
         let opts = SymmetryOptions::default();
         assert!(symmetrize(&trousers(), &body, &positions, None, &opts).is_none(), "nearest vertices alone fail");
         let top = Topology { triangles: &triangles, nodes };
-        let out = symmetrize(&trousers(), &body, &positions, Some(top), &opts).expect("partners by topology");
-        let w = id(3, 1) as usize;
+        let out = symmetrize(&trousers(), &body, &positions, Some(top), &opts).expect("partners by topology").raw;
+        let w = id(3, 1).idx();
         assert!(mirror(out[v]).distance(out[w]) < 1e-12, "the pair mirrors exactly");
         assert!(out[v].distance(exact[v] + n * 0.0045) < 1e-12, "each moved by half the asymmetry");
         // the centre column lands on the plane; the rest stays
-        assert!((n.dot(out[id(2, 1) as usize]) - d).abs() < 1e-12);
+        assert!((n.dot(out[id(2, 1).idx()]) - d).abs() < 1e-12);
         for u in (0..cells.len()).filter(|&u| u != v && u != w) {
             assert!(out[u].distance(exact[u]) < 1e-12, "vertex {u} was symmetric and stays");
         }
         // connectivity that is not mirrored (one diagonal flipped) gives no map: nearest vertices decide
         let mut flipped = triangles.clone();
         let (a, b, c, e) = (id(0, 0), id(1, 0), id(0, 1), id(1, 1));
-        flipped[0] = [a, b, c];
-        flipped[1] = [b, e, c];
+        flipped.raw[0] = [a, b, c];
+        flipped.raw[1] = [b, e, c];
         let top = Topology { triangles: &flipped, nodes };
         assert!(symmetrize(&trousers(), &body, &positions, Some(top), &opts).is_none());
     }
