@@ -1,5 +1,6 @@
 //! Collision benchmarks (issue #4): depth-map render and read-back at
-//! 512² and 1024² (GL/llvmpipe and Vulkan/lavapipe), and the depth-map
+//! 512² and 1024² (GL/llvmpipe and Vulkan/lavapipe, and the core's CPU
+//! rasteriser), and the depth-map
 //! inside test per point against the exact (winding-number) test.
 //! Run: `cargo bench --bench collide`.
 #![expect(missing_docs, reason = "criterion_group! generates undocumented items")]
@@ -9,7 +10,9 @@ use std::path::Path;
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::DVec3;
 use grade3d::collide::depth::inside;
+use grade3d::collide::raster::CpuRasteriser;
 use grade3d::collide::render::{GpuContext, RenderOptions};
+use grade3d::collide::DepthRenderer;
 use grade3d::geom::winding::{WindingOptions, WindingTree};
 use grade3d::io::gltf::read_mesh;
 
@@ -33,6 +36,13 @@ fn benches(c: &mut Criterion) {
                 b.iter(|| gpu.render(&mesh, &opts).expect("render"))
             });
         }
+    }
+    // the core's CPU rasteriser, the renderer where the adapter is a CPU driver (issue #15)
+    for res in [512u32, 1024] {
+        let opts = RenderOptions { resolution: res, ..Default::default() };
+        g.bench_function(format!("render_cpu_rasteriser_{res}"), |b| {
+            b.iter(|| CpuRasteriser.depth_maps(&mesh, &opts).expect("render"))
+        });
     }
     g.finish();
 

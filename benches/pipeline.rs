@@ -8,7 +8,8 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use grade3d::collide::cache::{Obstacle, ObstacleCache, ObstacleCacheOptions};
-use grade3d::collide::render::{GpuContext, RenderOptions};
+use grade3d::collide::render::{RenderOptions, Renderer, RendererChoice};
+use grade3d::collide::DepthRenderer;
 use grade3d::geom::intersect::intersecting_pairs;
 use grade3d::geom::winding::{penetration_stats, WindingOptions, WindingTree};
 use grade3d::pattern::export::{dxf, svg};
@@ -20,8 +21,11 @@ use grade3d::template::library::{builtin, reference_body};
 fn benches(c: &mut Criterion) {
     let body = reference_body().expect("reference body");
     let t = builtin().expect("library").into_iter().next().expect("skirt");
-    let obstacle = GpuContext::new().ok().map(|gpu| Obstacle {
-        maps: gpu.render(&body.mesh, &RenderOptions::default()).expect("render"),
+    // the renderer the service picks here (the CPU rasteriser where wgpu's adapter is a CPU driver)
+    let renderer = Renderer::new(RendererChoice::Auto).expect("a renderer");
+    eprintln!("depth maps: {}", renderer.describe());
+    let obstacle = Some(Obstacle {
+        maps: renderer.depth_maps(&body.mesh, &RenderOptions::default()).expect("render"),
         tree: WindingTree::new(&body.mesh, &WindingOptions::default()),
     });
     let opts = GradeOptions::default();
@@ -78,9 +82,9 @@ fn benches(c: &mut Criterion) {
     // landmarks, derive the feature model, render the depth maps and build the
     // winding tree (scans are not cached), grade, write SVG, DXF, JSON, GLB
     // and the report
-    if let Ok(gpu) = GpuContext::new() {
+    {
         let ctx = WorkContext {
-            gpu: Some(std::sync::Arc::new(gpu)),
+            renderer: Some(std::sync::Arc::new(renderer)),
             obstacles: std::sync::Arc::new(ObstacleCache::new(ObstacleCacheOptions::default())),
             opts: WorkOptions::default(),
         };

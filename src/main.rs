@@ -104,6 +104,11 @@ struct GradeArgs {
     /// them in `timings_ms`; benches/chart.sh reads it.
     #[arg(long)]
     timings: bool,
+    /// What draws the body's depth maps: `auto` (wgpu on a GPU, the CPU
+    /// rasteriser where wgpu's adapter is a CPU driver or there is none),
+    /// `wgpu` or `cpu`.
+    #[arg(long, env = "GRADE3D_RENDERER", default_value_t = grade3d::collide::render::RendererChoice::Auto)]
+    renderer: grade3d::collide::render::RendererChoice,
 }
 
 /// Bad input to a command: exit code 2.
@@ -175,7 +180,7 @@ fn creation_stamp(given: Option<&str>) -> Result<grade3d::pattern::export::rul::
 /// (`grade3d::service::work`) run here, their artefacts written to `--out`.
 fn grade_offline(args: &GradeArgs) -> Result<(), Box<dyn std::error::Error>> {
     use grade3d::collide::cache::{ObstacleCache, ObstacleCacheOptions};
-    use grade3d::collide::render::GpuContext;
+    use grade3d::collide::render::Renderer;
     use grade3d::mannequin::size_chart;
     use grade3d::service::problem::Problem;
     use grade3d::service::work::{self, BodyInput, WorkContext, WorkOptions};
@@ -202,15 +207,18 @@ fn grade_offline(args: &GradeArgs) -> Result<(), Box<dyn std::error::Error>> {
         };
         templates.push(t);
     }
-    let gpu = match GpuContext::new() {
-        Ok(g) => Some(std::sync::Arc::new(g)),
+    let renderer = match Renderer::new(args.renderer) {
+        Ok(r) => {
+            tracing::info!(renderer = %r.describe(), "depth-map renderer ready");
+            Some(std::sync::Arc::new(r))
+        }
         Err(e) => {
             tracing::warn!(error = %e, "no wgpu adapter: grading without collision avoidance");
             None
         }
     };
     let ctx = WorkContext {
-        gpu,
+        renderer,
         obstacles: std::sync::Arc::new(ObstacleCache::new(ObstacleCacheOptions::default())),
         opts: WorkOptions::default(),
     };
@@ -376,20 +384,12 @@ fn flatten_panel(path: &std::path::Path, plain: bool) -> Result<(), Box<dyn std:
 
 fn write_panels(dir: &std::path::Path) -> Result<(), Box<dyn std::error::Error>> {
     use grade3d::collide::cache::Obstacle;
-    use grade3d::collide::render::{GpuContext, RenderOptions};
-    use grade3d::geom::winding::{WindingOptions, WindingTree};
+    use grade3d::collide::render::{RenderOptions, Renderer, RendererChoice};
+    use grade3d::geom::winding::WindingOptions;
     std::fs::create_dir_all(dir)?;
     let body = grade3d::template::library::reference_body()?;
-    let obstacle = match GpuContext::new() {
-        Ok(gpu) => Some(Obstacle {
-            maps: gpu.render(&body.mesh, &RenderOptions::default())?,
-            tree: WindingTree::new(&body.mesh, &WindingOptions::default()),
-        }),
-        Err(e) => {
-            eprintln!("no GPU adapter ({e}): refining without collision avoidance");
-            None
-        }
-    };
+    let renderer = Renderer::new(RendererChoice::Auto)?;
+    let obstacle = Some(Obstacle::build(&body.mesh, &renderer, &RenderOptions::default(), &WindingOptions::default())?);
     for t in grade3d::template::library::builtin().map_err(|(name, e)| format!("template {name}: {e}"))? {
         let g = grade3d::pipeline::grade(&t, &body, obstacle.as_ref(), "reference", &Default::default())?;
         let (panels, _) = grade3d::pattern::panels::cut(&t, &g.mesh.positions, &g.mesh.triangles, &g.lineage)?;

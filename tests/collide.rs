@@ -19,6 +19,7 @@ use std::time::Instant;
 
 use glam::DVec3;
 use grade3d::collide::depth::{encode_depth, encode_normal, inside, DepthMap, View};
+use grade3d::collide::raster::CpuRasteriser;
 use grade3d::collide::render::{GpuContext, RenderOptions};
 use grade3d::collide::{DepthRenderer, Obstacle};
 use grade3d::geom::mesh::{FaceId, TriMesh};
@@ -225,19 +226,30 @@ fn body_depth_maps_match_the_cpu_reference_on_gl_and_vulkan() {
             Ok(g) => g,
             Err(e) => panic!("no {label} adapter: {e} (.ci/run installs Mesa's llvmpipe and lavapipe)"),
         };
-        check_body_maps(&gpu);
+        let info = gpu.adapter();
+        check_body_maps(&gpu, &format!("{} ({:?})", info.name, info.backend), &format!("{:?}", info.backend));
     }
 }
 
-fn check_body_maps(gpu: &GpuContext) {
-    let info = gpu.adapter().clone();
+/// The core's CPU rasteriser (issue #15: the renderer on machines whose
+/// adapter is a CPU driver) against the same reference and metric as wgpu.
+#[test]
+fn the_cpu_rasteriser_matches_the_cpu_reference() {
+    check_body_maps(&CpuRasteriser, "CPU rasteriser", "cpu");
+}
+
+fn check_body_maps<R: DepthRenderer>(renderer: &R, label: &str, file: &str)
+where
+    R::Error: std::fmt::Debug,
+{
     let mesh = gltf::read_mesh(
         &std::fs::read(fixtures().join("bodies/female-average-caucasian.glb")).unwrap(),
         &Default::default(),
     )
     .unwrap();
     let n = 512; // the golden test pins its own resolution
-    let maps: Vec<DepthMap> = gpu.render(&mesh, &RenderOptions { resolution: n, ..Default::default() }).unwrap();
+    let maps: Vec<DepthMap> =
+        renderer.depth_maps(&mesh, &RenderOptions { resolution: n, ..Default::default() }).unwrap();
     assert_eq!(maps.len(), 2);
     for (k, m) in maps.iter().enumerate() {
         let (front, back) = rasterise(&mesh, &m.view, n);
@@ -247,12 +259,10 @@ fn check_body_maps(gpu: &GpuContext) {
         };
         let (gf, gb) = (world(&|i| m.front_depth(i)), world(&|i| m.back_depth(i)));
         for (which, g, c) in [("front", &gf, &front), ("back", &gb, &back)] {
-            let name = format!("{:?}-view{k}-{which}", info.backend);
+            let name = format!("{file}-view{k}-{which}");
             let cmp = compare(&name, n, g, c, &m.view);
             eprintln!(
-                "{} ({:?}) view {k} {which}: coverage mismatch {:.4} %, max interior depth difference {:.4} mm",
-                info.name,
-                info.backend,
+                "{label} view {k} {which}: coverage mismatch {:.4} %, max interior depth difference {:.4} mm",
                 100.0 * cmp.coverage_mismatch,
                 cmp.max_depth_diff_m * 1e3
             );
@@ -385,15 +395,20 @@ fn the_core_builds_one_obstacle_from_any_renderer() {
     let cpu = Obstacle::build(&mesh, &CpuReference, &opts, &winding).unwrap();
     let gpu = GpuContext::new().expect("wgpu adapter (see .ci/run)");
     let wgpu = Obstacle::build(&mesh, &gpu, &opts, &winding).unwrap();
+    let raster = Obstacle::build(&mesh, &CpuRasteriser, &opts, &winding).unwrap();
     let bb = mesh.aabb();
     let mut rng = SplitMix64(16);
     let pts: Vec<DVec3> =
         (0..20_000).map(|_| bb.min + (bb.max - bb.min) * DVec3::new(rng.unit(), rng.unit(), rng.unit())).collect();
     let (mut same, mut cpu_exact, mut gpu_exact, mut inside_count) = (0, 0, 0, 0);
+    let (mut raster_same, mut raster_gpu) = (0, 0);
     for &p in &pts {
         let (c, g) = (inside(&cpu.maps, p).is_some(), inside(&wgpu.maps, p).is_some());
+        let r = inside(&raster.maps, p).is_some();
         let exact = cpu.tree.winding_number(p) >= 0.5;
         same += usize::from(c == g);
+        raster_same += usize::from(r == c);
+        raster_gpu += usize::from(r == g);
         cpu_exact += usize::from(c == exact);
         gpu_exact += usize::from(g == exact);
         inside_count += usize::from(exact);
@@ -407,7 +422,9 @@ fn the_core_builds_one_obstacle_from_any_renderer() {
         share(cpu_exact),
         share(gpu_exact)
     );
+    eprintln!("CPU rasteriser vs reference {:.4}, vs wgpu {:.4}", share(raster_same), share(raster_gpu));
     assert!(inside_count > 1_000, "the sample reaches into the body");
+    assert!(share(raster_same) >= 0.999 && share(raster_gpu) >= 0.998, "{raster_same} {raster_gpu}");
     assert!(share(same) >= 0.998, "CPU and wgpu obstacles agree on {:.4}", share(same));
     assert!(share(cpu_exact) >= 0.995 && share(gpu_exact) >= 0.995, "{:.4} {:.4}", share(cpu_exact), share(gpu_exact));
 }

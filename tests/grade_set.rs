@@ -21,7 +21,8 @@
 //! the 3D garment. Every bar on every template on both charts.
 
 use grade3d::collide::cache::Obstacle;
-use grade3d::collide::render::{GpuContext, RenderOptions};
+use grade3d::collide::render::{RenderOptions, Renderer, RendererChoice};
+use grade3d::collide::DepthRenderer;
 use grade3d::geom::winding::{WindingOptions, WindingTree};
 use grade3d::mannequin::fit::{fit_chart, FitOptions};
 use grade3d::mannequin::model::BodyModel;
@@ -67,11 +68,11 @@ fn grade_set(chart: &str, base_size: &str, nest_bar: &[&str], step_bar: &[&str])
             assert!(r.error_mm().abs() <= RESIDUAL_MM, "size {}: {id} off by {:.2} mm", f.size, r.error_mm());
         }
     }
-    let gpu = GpuContext::new().expect("wgpu adapter (see .ci/run)");
+    let renderer = Renderer::new(RendererChoice::Auto).expect("a depth-map renderer (the one the service picks)");
     let obstacles: Vec<Obstacle> = fits
         .iter()
         .map(|f| Obstacle {
-            maps: gpu.render(&f.body.mesh, &RenderOptions::default()).unwrap(),
+            maps: renderer.depth_maps(&f.body.mesh, &RenderOptions::default()).unwrap(),
             tree: WindingTree::new(&f.body.mesh, &WindingOptions::default()),
         })
         .collect();

@@ -13,7 +13,8 @@ use std::path::PathBuf;
 use grade3d::body::derive::{derive_features, DeriveOptions};
 use grade3d::body::measure::{measure, MeasureOptions, MeasurementId, Measurements};
 use grade3d::collide::cache::Obstacle;
-use grade3d::collide::render::{GpuContext, RenderOptions};
+use grade3d::collide::render::{RenderOptions, Renderer, RendererChoice};
+use grade3d::collide::DepthRenderer;
 use grade3d::geom::winding::{penetration_stats, WindingOptions, WindingTree};
 use grade3d::pattern::export::{dxf, rul, svg};
 use grade3d::pattern::garment::DartPlan;
@@ -70,7 +71,7 @@ impl Worst {
 
 #[test]
 fn patterns_on_every_body_meet_the_bars() {
-    let gpu = GpuContext::new().expect("wgpu adapter (see .ci/run)");
+    let renderer = Renderer::new(RendererChoice::Auto).expect("a depth-map renderer (the one the service picks)");
     let library = builtin().unwrap();
     let dir = export_dir();
     let mut seam = Worst::default();
@@ -106,7 +107,7 @@ fn patterns_on_every_body_meet_the_bars() {
     for (name, mesh, lm) in bodies {
         let body = derive_features(mesh, &lm, &DeriveOptions::default()).unwrap();
         chart.insert(name.clone(), measure(&body, &MeasureOptions::default()));
-        let maps = gpu.render(&body.mesh, &RenderOptions::default()).unwrap();
+        let maps = renderer.depth_maps(&body.mesh, &RenderOptions::default()).unwrap();
         let obstacle = Obstacle { maps, tree: WindingTree::new(&body.mesh, &WindingOptions::default()) };
         let size = name.rsplit('/').next().unwrap().to_string();
         for t in &library {

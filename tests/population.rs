@@ -36,7 +36,8 @@ use std::time::Instant;
 use grade3d::body::derive::{derive_features, DeriveOptions, Landmarks};
 use grade3d::body::ease::{girth_ease, EaseOptions};
 use grade3d::collide::cache::Obstacle;
-use grade3d::collide::render::{GpuContext, RenderOptions};
+use grade3d::collide::render::{RenderOptions, Renderer, RendererChoice};
+use grade3d::collide::DepthRenderer;
 use grade3d::geom::mesh::TriMesh;
 use grade3d::geom::winding::{penetration_stats, WindingOptions, WindingTree};
 use grade3d::mannequin::landmarks::hm08_landmarks;
@@ -104,7 +105,7 @@ impl Worst {
 }
 
 fn run(range: std::ops::Range<usize>) {
-    let gpu = GpuContext::new().expect("wgpu adapter (see .ci/run)");
+    let renderer = Renderer::new(RendererChoice::Auto).expect("a depth-map renderer (the one the service picks)");
     let library = builtin().unwrap();
     let mut deepest: BTreeMap<String, Worst> = BTreeMap::new();
     let mut inside: BTreeMap<String, usize> = BTreeMap::new();
@@ -141,7 +142,7 @@ fn run(range: std::ops::Range<usize>) {
                 failures.push(format!("{name}: thigh contact without its warning"));
             }
         }
-        let maps = gpu.render(&body.mesh, &RenderOptions::default()).unwrap();
+        let maps = renderer.depth_maps(&body.mesh, &RenderOptions::default()).unwrap();
         let obstacle = Obstacle { maps, tree: WindingTree::new(&body.mesh, &WindingOptions::default()) };
         for t in &library {
             let g = match grade(t, &body, Some(&obstacle), &name, &GradeOptions::default()) {

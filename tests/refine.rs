@@ -6,7 +6,8 @@
 use glam::DVec3;
 use grade3d::body::derive::{derive_features, DeriveOptions};
 use grade3d::collide::depth::{inside, ViewSet};
-use grade3d::collide::render::{GpuContext, RenderOptions};
+use grade3d::collide::render::{RenderOptions, Renderer, RendererChoice};
+use grade3d::collide::DepthRenderer;
 use grade3d::geom::winding::{penetration_stats, WindingOptions, WindingTree};
 use grade3d::refine::collision::{Collider, CollisionOptions};
 use grade3d::refine::subdivide::{refine, RefineMesh, RefineOptions, Refined};
@@ -19,7 +20,7 @@ use common::fixture_bodies;
 
 #[test]
 fn library_on_every_body_stays_outside() {
-    let gpu = GpuContext::new().expect("wgpu adapter (see .ci/run)");
+    let renderer = Renderer::new(RendererChoice::Auto).expect("a depth-map renderer (the one the service picks)");
     let library = builtin().unwrap();
     let mut worst_on = (0.0f64, String::new());
     let mut worst_off = (0.0f64, String::new());
@@ -29,7 +30,7 @@ fn library_on_every_body_stays_outside() {
     let (mut max_iterations, mut worst_update) = (0usize, 0.0f64);
     for (name, mesh, lm) in fixture_bodies() {
         let body = derive_features(mesh, &lm, &DeriveOptions::default()).unwrap();
-        let maps = gpu.render(&body.mesh, &RenderOptions::default()).unwrap();
+        let maps = renderer.depth_maps(&body.mesh, &RenderOptions::default()).unwrap();
         let tree = WindingTree::new(&body.mesh, &WindingOptions::default());
         for t in &library {
             let m0 = decode(t, &body, Relocation::Eq1Frame).unwrap();
@@ -111,7 +112,7 @@ fn library_on_every_body_stays_outside() {
 
 #[test]
 fn depth_map_inside_test_agrees_with_the_exact_test() {
-    let gpu = GpuContext::new().expect("wgpu adapter (see .ci/run)");
+    let renderer = Renderer::new(RendererChoice::Auto).expect("a depth-map renderer (the one the service picks)");
     let (_, mesh, _) = fixture_bodies().swap_remove(1);
     let tree = WindingTree::new(&mesh, &WindingOptions::default());
     let bb = mesh.aabb();
@@ -132,7 +133,7 @@ fn depth_map_inside_test_agrees_with_the_exact_test() {
         (ViewSet::FrontBack, 1024),
         (ViewSet::FrontBackSides, 1024),
     ] {
-        let maps = gpu.render(&mesh, &RenderOptions { views, resolution, ..Default::default() }).unwrap();
+        let maps = renderer.depth_maps(&mesh, &RenderOptions { views, resolution, ..Default::default() }).unwrap();
         let mut disagree = 0usize;
         let mut near_surface = 0usize;
         let mut false_inside = 0usize;

@@ -15,6 +15,13 @@
 //! Backend: `WGPU_BACKEND` (`gl`, `vulkan`, …) or every available one.
 //! Failure modes: no adapter, device request refused, read-back failure —
 //! each a [`RenderError`].
+//!
+//! [`Renderer`] is what the service and the CLI hold: the wgpu context on
+//! a GPU, or the core's CPU rasteriser
+//! ([`grade3d_core::collide::raster`]) where wgpu's only adapter is itself
+//! a CPU driver (llvmpipe, lavapipe) or there is none — the same maps
+//! (`tests/collide.rs` holds both to one reference) at a fraction of the
+//! time (issue #15). [`RendererChoice`] overrides the choice.
 
 use std::sync::mpsc;
 
@@ -23,6 +30,7 @@ use glam::DVec3;
 use wgpu::util::DeviceExt;
 
 use grade3d_core::collide::depth::{DepthMap, View, DEPTH_CODES};
+use grade3d_core::collide::raster::{CpuRasteriser, RasterError, MAX_RESOLUTION};
 use grade3d_core::collide::DepthRenderer;
 pub use grade3d_core::collide::RenderOptions;
 use grade3d_core::geom::mesh::TriMesh;
@@ -123,12 +131,10 @@ impl GpuContext {
     }
 
     fn with_instance(desc: wgpu::InstanceDescriptor) -> Result<Self, RenderError> {
-        let instance = wgpu::Instance::new(desc);
-        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
-            power_preference: wgpu::PowerPreference::HighPerformance,
-            ..Default::default()
-        }))
-        .map_err(|e| RenderError::NoAdapter(e.to_string()))?;
+        Self::with_adapter(open_adapter(desc)?)
+    }
+
+    fn with_adapter(adapter: wgpu::Adapter) -> Result<Self, RenderError> {
         let info = adapter.get_info();
         let limits = wgpu::Limits::downlevel_webgl2_defaults().using_resolution(adapter.limits());
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
@@ -354,6 +360,115 @@ impl DepthRenderer for GpuContext {
 
     fn depth_maps(&self, mesh: &TriMesh, opts: &RenderOptions) -> Result<Vec<DepthMap>, RenderError> {
         self.render(mesh, opts)
+    }
+}
+
+/// The adapter wgpu picks for `desc` (high performance first).
+fn open_adapter(desc: wgpu::InstanceDescriptor) -> Result<wgpu::Adapter, RenderError> {
+    let instance = wgpu::Instance::new(desc);
+    pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+        power_preference: wgpu::PowerPreference::HighPerformance,
+        ..Default::default()
+    }))
+    .map_err(|e| RenderError::NoAdapter(e.to_string()))
+}
+
+/// Which renderer draws the depth maps ([`Renderer::new`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum RendererChoice {
+    /// wgpu on a GPU; the CPU rasteriser where wgpu's adapter is a CPU
+    /// driver or there is no adapter. The default.
+    #[default]
+    Auto,
+    /// wgpu, whatever its adapter (an error without one).
+    Wgpu,
+    /// The CPU rasteriser.
+    Cpu,
+}
+
+impl std::str::FromStr for RendererChoice {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "auto" => Ok(Self::Auto),
+            "wgpu" => Ok(Self::Wgpu),
+            "cpu" => Ok(Self::Cpu),
+            _ => Err(format!("renderer `{s}` is none of auto, wgpu, cpu")),
+        }
+    }
+}
+
+impl std::fmt::Display for RendererChoice {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Auto => "auto",
+            Self::Wgpu => "wgpu",
+            Self::Cpu => "cpu",
+        })
+    }
+}
+
+/// The process's depth-map renderer (module docs).
+#[derive(Debug)]
+pub enum Renderer {
+    /// wgpu on its adapter.
+    Wgpu(Box<GpuContext>),
+    /// The core's CPU rasteriser; why it was chosen (for logs and `/readyz`).
+    Cpu {
+        /// The reason, e.g. the CPU driver wgpu offered.
+        reason: String,
+    },
+}
+
+impl Renderer {
+    /// The renderer `choice` asks for (module docs). Auto opens wgpu's
+    /// adapter (`WGPU_BACKEND` as [`GpuContext::new`]) and asks for a
+    /// device only when the adapter is not a CPU.
+    ///
+    /// # Errors
+    /// With [`RendererChoice::Wgpu`], [`GpuContext::new`]'s; the others do not fail.
+    pub fn new(choice: RendererChoice) -> Result<Self, RenderError> {
+        let from_env = wgpu::InstanceDescriptor::new_without_display_handle_from_env;
+        match choice {
+            RendererChoice::Cpu => Ok(Self::Cpu { reason: "chosen".into() }),
+            RendererChoice::Wgpu => GpuContext::new().map(|g| Self::Wgpu(Box::new(g))),
+            RendererChoice::Auto => match open_adapter(from_env()) {
+                Ok(a) if a.get_info().device_type == wgpu::DeviceType::Cpu => {
+                    let info = a.get_info();
+                    Ok(Self::Cpu {
+                        reason: format!("wgpu's adapter {} ({:?}) is a CPU driver", info.name, info.backend),
+                    })
+                }
+                Ok(a) => match GpuContext::with_adapter(a) {
+                    Ok(g) => Ok(Self::Wgpu(Box::new(g))),
+                    Err(e) => Ok(Self::Cpu { reason: format!("the GPU refused a device: {e}") }),
+                },
+                Err(e) => Ok(Self::Cpu { reason: format!("no wgpu adapter: {e}") }),
+            },
+        }
+    }
+
+    /// What draws the maps, for logs and `/readyz`: the adapter's name and
+    /// backend, or the CPU rasteriser and why.
+    pub fn describe(&self) -> String {
+        match self {
+            Self::Wgpu(g) => format!("{} ({:?})", g.adapter().name, g.adapter().backend),
+            Self::Cpu { reason } => format!("CPU rasteriser ({reason})"),
+        }
+    }
+}
+
+impl DepthRenderer for Renderer {
+    type Error = RenderError;
+
+    fn depth_maps(&self, mesh: &TriMesh, opts: &RenderOptions) -> Result<Vec<DepthMap>, RenderError> {
+        match self {
+            Self::Wgpu(g) => g.render(mesh, opts),
+            Self::Cpu { .. } => CpuRasteriser.depth_maps(mesh, opts).map_err(|e| match e {
+                RasterError::Resolution { requested } => RenderError::Resolution { requested, max: MAX_RESOLUTION },
+            }),
+        }
     }
 }
 

@@ -52,7 +52,8 @@ pub struct Ready {
     pub ready: bool,
     /// Live templates.
     pub templates: usize,
-    /// The adapter, or null when none was found (grading then runs without
+    /// What draws the depth maps: the wgpu adapter, or the CPU rasteriser
+    /// and why; null when there are none (grading then runs without
     /// collision avoidance).
     pub gpu: Option<String>,
 }

@@ -40,7 +40,7 @@ use crate::api::{
     ArtefactLink, GradeResult, JobProgress, JobView, Ready, SizeChartQuery, SizeChartRequest, VersionQuery,
 };
 use crate::collide::cache::{ObstacleCache, ObstacleCacheOptions};
-use crate::collide::render::GpuContext;
+use crate::collide::render::{Renderer, RendererChoice};
 use crate::mannequin::size_chart::{parse_csv, parse_json, FigureType, SizeChart, SizeChartOptions};
 use crate::pattern::export::rul::Created;
 use crate::template::format::Template;
@@ -114,9 +114,14 @@ pub struct ServiceConfig {
     /// Memory for cached results, bytes.
     #[arg(long, env = "GRADE3D_RESULT_CACHE_BYTES", default_value_t = 256 << 20)]
     pub result_cache_bytes: usize,
-    /// Grade without a GPU context (no collision avoidance): for tests.
+    /// Grade without depth maps (no collision avoidance): for tests.
     #[arg(long, env = "GRADE3D_NO_GPU", default_value_t = false)]
     pub no_gpu: bool,
+    /// What draws the body's depth maps: `auto` (wgpu on a GPU, the CPU
+    /// rasteriser where wgpu's adapter is a CPU driver or there is none),
+    /// `wgpu` or `cpu`.
+    #[arg(long, env = "GRADE3D_RENDERER", default_value_t = RendererChoice::Auto)]
+    pub renderer: RendererChoice,
 }
 
 /// `--request-timeout-s`'s default, seconds.
@@ -162,8 +167,9 @@ pub struct Inner {
     pub store: TemplateStore,
     /// Batch jobs.
     pub jobs: JobStore,
-    /// The GPU, once its start-up attempt has ended (`None` inside: none found or not wanted).
-    pub gpu: OnceLock<Option<Arc<GpuContext>>>,
+    /// The depth-map renderer, once its start-up has ended (`None` inside:
+    /// not wanted, or wgpu asked for and not found).
+    pub renderer: OnceLock<Option<Arc<Renderer>>>,
     /// Mannequin depth maps and winding trees.
     pub obstacles: Arc<ObstacleCache>,
     /// Synchronous results.
@@ -190,7 +196,7 @@ pub struct AppState(pub Arc<Inner>);
 impl AppState {
     /// Opens the stores under `cfg.data_dir` (seeding the built-in
     /// templates on first start) and queues again every unfinished job.
-    /// The GPU is not touched: call [`AppState::start_gpu`].
+    /// The renderer is not opened: call [`AppState::start_gpu`].
     ///
     /// # Errors
     /// A message naming what failed.
@@ -210,7 +216,7 @@ impl AppState {
             cfg,
             store,
             jobs,
-            gpu: OnceLock::new(),
+            renderer: OnceLock::new(),
             obstacles: Arc::new(ObstacleCache::new(ObstacleCacheOptions::default())),
             pool,
             metrics: Metrics::new(),
@@ -230,18 +236,18 @@ impl AppState {
         Ok(state)
     }
 
-    /// Creates the GPU context on a blocking thread (or records that there
-    /// is none); `/readyz` answers 200 once this has ended.
+    /// Opens the depth-map renderer on a blocking thread (or records that
+    /// there is none); `/readyz` answers 200 once this has ended.
     pub fn start_gpu(&self) {
         let me = self.clone();
         std::thread::spawn(move || {
-            let gpu = if me.0.cfg.no_gpu {
+            let renderer = if me.0.cfg.no_gpu {
                 None
             } else {
-                match GpuContext::new() {
-                    Ok(g) => {
-                        tracing::info!(adapter = %g.adapter().name, backend = ?g.adapter().backend, "wgpu adapter ready");
-                        Some(Arc::new(g))
+                match Renderer::new(me.0.cfg.renderer) {
+                    Ok(r) => {
+                        tracing::info!(renderer = %r.describe(), "depth-map renderer ready");
+                        Some(Arc::new(r))
                     }
                     Err(e) => {
                         tracing::warn!(error = %e, "no wgpu adapter: grading runs without collision avoidance");
@@ -249,7 +255,7 @@ impl AppState {
                     }
                 }
             };
-            let _ = me.0.gpu.set(gpu);
+            let _ = me.0.renderer.set(renderer);
         });
     }
 
@@ -281,9 +287,9 @@ impl AppState {
     }
 
     fn work_context(&self) -> Result<WorkContext, Problem> {
-        let gpu = self.0.gpu.get().ok_or_else(not_ready)?.clone();
+        let renderer = self.0.renderer.get().ok_or_else(not_ready)?.clone();
         Ok(WorkContext {
-            gpu,
+            renderer,
             obstacles: Arc::clone(&self.0.obstacles),
             opts: WorkOptions { max_scan_vertices: self.0.cfg.max_scan_vertices, ..WorkOptions::default() },
         })
@@ -373,14 +379,10 @@ async fn healthz() -> &'static str {
         (status = 500, response = api::Internal),
     ))]
 async fn readyz(State(s): State<AppState>) -> Result<Json<Ready>, Problem> {
-    let gpu = s.0.gpu.get().ok_or_else(not_ready)?;
+    let renderer = s.0.renderer.get().ok_or_else(not_ready)?;
     let me = s.clone();
     let templates = off_executor(move || Ok(me.0.store.list()?.len())).await?;
-    Ok(Json(Ready {
-        ready: true,
-        templates,
-        gpu: gpu.as_ref().map(|g| format!("{} ({:?})", g.adapter().name, g.adapter().backend)),
-    }))
+    Ok(Json(Ready { ready: true, templates, gpu: renderer.as_ref().map(|r| r.describe()) }))
 }
 
 /// Prometheus metrics (text exposition format 0.0.4).
@@ -1197,8 +1199,8 @@ fn run_job(s: &AppState, id: &str) {
     if let Err(e) = s.0.jobs.put(&r) {
         tracing::error!(error = %e, "job state could not be stored");
     }
-    // wait for the GPU start-up to end
-    while s.0.gpu.get().is_none() {
+    // wait for the renderer's start-up to end
+    while s.0.renderer.get().is_none() {
         std::thread::sleep(Duration::from_millis(50));
     }
     // a panic ends the job as failed (its place given back), not as `running` for ever

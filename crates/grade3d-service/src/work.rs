@@ -34,7 +34,7 @@ use crate::body::derive::{derive_features, DeriveOptions, FeatureError, Landmark
 use crate::body::feature::FeatureBody;
 use crate::body::measure::{measure, MeasureOptions};
 use crate::collide::cache::{BodyKey, Obstacle, ObstacleCache};
-use crate::collide::render::{GpuContext, RenderError, RenderOptions};
+use crate::collide::render::{RenderError, RenderOptions, Renderer};
 use crate::geom::mesh::TriMesh;
 use crate::geom::winding::WindingOptions;
 use crate::io::gltf::{read_mesh, write_glb, GlbAttribute, GltfError, GltfReadOptions};
@@ -203,14 +203,14 @@ impl Default for WorkOptions {
     }
 }
 
-/// What the flows share: the GPU (optional: without one, grading runs
-/// without collision avoidance and the report says so) and the per-body
+/// What the flows share: the depth-map renderer (optional: without one,
+/// grading runs without collision avoidance and the report says so) and the per-body
 /// obstacle cache (used for mannequins only: scans are personal data and
 /// nothing derived from them outlives the request).
 #[derive(Debug)]
 pub struct WorkContext {
-    /// The one wgpu device of the process.
-    pub gpu: Option<Arc<GpuContext>>,
+    /// The process's one depth-map renderer (wgpu, or the CPU rasteriser).
+    pub renderer: Option<Arc<Renderer>>,
     /// Depth maps and winding trees of mannequins.
     pub obstacles: Arc<ObstacleCache>,
     /// Knobs.
@@ -253,13 +253,13 @@ impl Timer {
 }
 
 impl WorkContext {
-    /// The body as an obstacle (none without a GPU), from the cache or built
+    /// The body as an obstacle (none without a renderer), from the cache or built
     /// and, with `cache`, kept there; its time goes to `timer`'s obstacle stage.
     fn obstacle(&self, mesh: &TriMesh, cache: bool, timer: &mut Timer) -> Result<Option<Arc<Obstacle>>, WorkError> {
         let start = Instant::now();
-        let Some(gpu) = &self.gpu else { return Ok(None) };
+        let Some(renderer) = &self.renderer else { return Ok(None) };
         // the winding tree is built on the CPU while the maps render (issue #15)
-        let build = || Obstacle::build(mesh, gpu.as_ref(), &self.opts.render, &WindingOptions::default());
+        let build = || Obstacle::build(mesh, renderer.as_ref(), &self.opts.render, &WindingOptions::default());
         let obstacle = if cache {
             self.obstacles.get_or_build(BodyKey::of(mesh, &self.opts.render), build)?
         } else {
@@ -699,7 +699,7 @@ pub fn size_chart(
         figure: (chart.sex == Sex::Female).then_some(chart.figure),
         base_size: base,
         templates: template_entries(templates),
-        collision_checked: ctx.gpu.is_some(),
+        collision_checked: ctx.renderer.is_some(),
         nest_truing: truing.into_iter().collect(),
         sizes,
     };
@@ -784,7 +784,7 @@ pub fn bodies(
     let report = BodiesReport {
         flow: if inputs.len() == 1 { Flow::Scan } else { Flow::Bodies },
         templates: template_entries(templates),
-        collision_checked: ctx.gpu.is_some(),
+        collision_checked: ctx.renderer.is_some(),
         bodies: reports,
     };
     finish(Report::Bodies(report), artefacts, timer)

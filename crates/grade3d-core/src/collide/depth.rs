@@ -16,7 +16,8 @@
 //! inside; intersecting views removes most of them).
 //!
 //! This module is pure data: the maps arrive from the renderer
-//! ([`super::render`]) or from tests. Empty pixels hold NaN.
+//! (`grade3d-render`'s wgpu renderer, [`super::raster`]) or from tests.
+//! Empty pixels hold NaN.
 
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -119,15 +120,33 @@ pub struct DepthMap {
     back_normal: Vec<[u8; 4]>,
 }
 
+/// Consecutive rows of a depth map as a renderer encodes them
+/// ([`DepthMap::from_bands`]).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct BandRows {
+    /// Per row its covered run `(x0, x1)`: pixels `x0..x1` from its first
+    /// to its last covered pixel; `None` where the row is empty.
+    pub runs: Vec<Option<(usize, usize)>>,
+    /// The runs' pixels in row order: front depth, back depth, front
+    /// normal, back normal (as [`DepthMap::from_rows`] keeps them; zero
+    /// where a pixel inside a run is empty).
+    pub pixels: [Vec<[u8; 4]>; 4],
+}
+
 /// Largest depth code: depth `z ∈ [0, 1]` is stored as `round(z (2²⁴ − 1))`.
 pub const DEPTH_CODES: f64 = 16_777_215.0;
 
-/// A pixel of [`DepthMap::front`] or [`DepthMap::back`] for the surface at
+/// A pixel of a [`DepthMap`]'s front or back depth image for the surface at
 /// `p·d = world` (m) in `view`: `z = (d_max − world) / (d_max − d_min)`,
 /// code `round(z (2²⁴ − 1))`, covered.
 pub fn encode_depth(view: &View, world: f64) -> [u8; 4] {
-    let z = ((view.d_range[1] - world) / (view.d_range[1] - view.d_range[0])).clamp(0.0, 1.0);
-    let code = (z * DEPTH_CODES).round() as u32;
+    encode_depth_code((view.d_range[1] - world) / (view.d_range[1] - view.d_range[0]))
+}
+
+/// The pixel of [`encode_depth`] for clip depth `z` (clamped to `[0, 1]`):
+/// code `round(z (2²⁴ − 1))`, covered.
+pub fn encode_depth_code(z: f64) -> [u8; 4] {
+    let code = (z.clamp(0.0, 1.0) * DEPTH_CODES).round() as u32;
     [(code >> 16) as u8, (code >> 8) as u8, code as u8, 255]
 }
 
@@ -189,6 +208,54 @@ impl DepthMap {
             map.front_normal.extend_from_slice(&fnm[x0..x1]);
             map.back_normal.extend_from_slice(&bnm[x0..x1]);
             map.rows.push([start, x0 as u32, x1 as u32]);
+        }
+        map
+    }
+
+    /// A map from a renderer that encodes the covered runs itself, in
+    /// [`BandRows`] of consecutive rows from the top. Rows beyond `height`
+    /// are ignored; missing rows are empty; a run is cut to `width` and to
+    /// the pixels given.
+    pub fn from_bands(view: View, width: u32, height: u32, bands: Vec<BandRows>) -> Self {
+        let stored: usize = bands.iter().map(|band| band.pixels[0].len()).sum();
+        let mut map = DepthMap {
+            view,
+            width,
+            height,
+            rows: Vec::with_capacity(height as usize),
+            front: Vec::with_capacity(stored),
+            back: Vec::with_capacity(stored),
+            front_normal: Vec::with_capacity(stored),
+            back_normal: Vec::with_capacity(stored),
+        };
+        for BandRows { runs, pixels: [f, b, fnm, bnm] } in bands {
+            let given = f.len().min(b.len()).min(fnm.len()).min(bnm.len());
+            // where the next run's pixels start in the band's arrays
+            let mut next = 0usize;
+            for run in runs {
+                if map.rows.len() == height as usize {
+                    break;
+                }
+                let start = map.front.len() as u32;
+                let Some((x0, x1)) = run.filter(|(x0, x1)| x0 < x1) else {
+                    map.rows.push([start, 0, 0]);
+                    continue;
+                };
+                let len = x1 - x0;
+                let (x0c, x1c) = (x0.min(width as usize), x1.min(width as usize));
+                let at_c = next.min(given);
+                let keep = (x1c - x0c).min(given - at_c);
+                let at = at_c;
+                map.front.extend_from_slice(&f[at..at + keep]);
+                map.back.extend_from_slice(&b[at..at + keep]);
+                map.front_normal.extend_from_slice(&fnm[at..at + keep]);
+                map.back_normal.extend_from_slice(&bnm[at..at + keep]);
+                map.rows.push([start, x0c as u32, (x0c + keep) as u32]);
+                next += len;
+            }
+        }
+        while map.rows.len() < height as usize {
+            map.rows.push([map.front.len() as u32, 0, 0]);
         }
         map
     }

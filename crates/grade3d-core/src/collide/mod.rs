@@ -1,10 +1,12 @@
 //! The body as an obstacle (seed 000 §5.4): front/back depth maps and the
 //! image-based inside test of Eq. (13) ([`depth`], pure data), with the
 //! exact winding-number test beside them ([`crate::geom::winding`]). The
-//! maps come from a [`DepthRenderer`] outside this crate: the wgpu renderer
-//! of the service, or a test's CPU reference.
+//! maps come from a [`DepthRenderer`]: the wgpu renderer outside this crate
+//! (`grade3d-render`), the CPU rasteriser inside it ([`raster`], for
+//! machines whose only adapter is a CPU driver), or a test's reference.
 
 pub mod depth;
+pub mod raster;
 
 use crate::geom::mesh::TriMesh;
 use crate::geom::winding::{WindingOptions, WindingTree};

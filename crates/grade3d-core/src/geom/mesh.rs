@@ -60,7 +60,7 @@ macro_rules! typed_id {
 }
 pub(crate) use typed_id;
 
-/// What every typed element id is ([`typed_id!`]): copyable, ordered,
+/// What every typed element id is (made by the crate's `typed_id!` macro): copyable, ordered,
 /// printable, convertible to and from a `usize` position. The topology
 /// checks ([`crate::geom::topology`]) are generic over it.
 pub trait MeshIndex:

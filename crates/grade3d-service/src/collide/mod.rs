@@ -3,7 +3,7 @@
 //! ([`render`], the `grade3d-render` crate) and the per-body cache of
 //! obstacles ([`cache`]).
 
-pub use grade3d_core::collide::{depth, DepthRenderer, Obstacle, RenderOptions};
+pub use grade3d_core::collide::{depth, raster, DepthRenderer, Obstacle, RenderOptions};
 pub use grade3d_render as render;
 
 pub mod cache;
