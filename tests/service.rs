@@ -258,6 +258,30 @@ fn wait_job(s: &Server, href: &str) -> serde_json::Value {
     }
 }
 
+/// The depth-map renderer is chosen by `--renderer` / `GRADE3D_RENDERER`
+/// (issue #15) and named by `/readyz`; an unknown choice is refused at
+/// start with the choices named.
+#[test]
+fn the_renderer_is_chosen_by_configuration_and_named_when_ready() {
+    let name = |choice: &str| {
+        let s = Server::start(&temp_dir("renderer"), &[("GRADE3D_RENDERER", choice)]);
+        call("GET", &s.url("/readyz"), &[], None).json()["gpu"].as_str().unwrap_or_default().to_owned()
+    };
+    assert_eq!(name("cpu"), "CPU rasteriser (chosen)");
+    let wgpu = name("wgpu");
+    assert!(!wgpu.is_empty() && !wgpu.starts_with("CPU rasteriser"), "wgpu names its adapter: {wgpu}");
+    // auto: wgpu on a GPU; the CPU rasteriser where wgpu's adapter is a CPU driver (Mesa's, as in CI)
+    let auto = name("auto");
+    assert!(auto == wgpu || auto.starts_with("CPU rasteriser (wgpu's adapter"), "{auto}");
+    let out = Command::new(env!("CARGO_BIN_EXE_grade3d"))
+        .args(["serve", "--addr", "127.0.0.1:0", "--renderer", "opengl"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2), "a bad flag is a usage error");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("none of auto, wgpu, cpu"), "{err}");
+}
+
 #[test]
 fn health_readiness_metrics_and_unknown_routes() {
     let s = Server::start(&temp_dir("health"), &[]);
