@@ -499,6 +499,34 @@ fn answers_validate_against_the_generated_schemas() {
         assert_eq!(r.status, 200, "{name}");
         validate("Template", &r.json());
     }
+    // issue #17, item 4: the vocabulary as a document, and the landmarks document's schema
+    let r = call("GET", &s.url("/v1/vocabulary"), &[], None);
+    assert_eq!(r.status, 200, "{}", r.text());
+    let vocab = r.json();
+    validate("Vocabulary", &vocab);
+    let point = |id: &str| vocab["points"].as_array().unwrap().iter().find(|p| p["id"] == id).unwrap().clone();
+    assert_eq!(point("hip_left")["landmark"], true);
+    assert_eq!(point("hip_left")["templates"], serde_json::json!(["straight-skirt", "trousers"]));
+    assert_eq!(point("waist_left")["templates"], serde_json::json!(["fitted-bodice", "straight-skirt", "trousers"]));
+    assert_eq!(point("knee_left")["templates"], serde_json::json!(["trousers"]));
+    // every fixture's landmarks document answers the schema; an unknown ID, a missing
+    // required landmark and a 2D point do not
+    for body in ["male-average-asian", "female-average-caucasian"] {
+        let text = fixture(&format!("bodies/{body}.landmarks.json"));
+        let mut doc: serde_json::Value = serde_json::from_slice(&text).unwrap();
+        validate("Landmarks", &doc);
+        for id in vocab["landmarks"].as_array().unwrap() {
+            assert!(doc["points"].get(id.as_str().unwrap()).is_some(), "{body} gives every required landmark");
+        }
+        let hip = doc["points"]["hip_left"].clone();
+        doc["points"].as_object_mut().unwrap().insert("hip_lft".into(), hip);
+        assert!(!errors("Landmarks", &doc).is_empty(), "an unknown point ID validated");
+        doc["points"].as_object_mut().unwrap().remove("hip_lft");
+        doc["points"].as_object_mut().unwrap().remove("ankle_left");
+        assert!(!errors("Landmarks", &doc).is_empty(), "a document without ankle_left validated");
+        doc["points"]["ankle_left"] = serde_json::json!([0.1, 0.2]);
+        assert!(!errors("Landmarks", &doc).is_empty(), "a 2D point validated");
+    }
 }
 
 #[test]

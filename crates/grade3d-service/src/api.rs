@@ -126,7 +126,7 @@ pub struct ScanUpload {
     /// The scan: GLB, or glTF with embedded buffers; metres, Y up, facing +Z.
     #[schema(value_type = String, format = Binary)]
     pub scan: Vec<u8>,
-    /// The landmarks document (JSON).
+    /// The landmarks document (JSON; its schema: `Landmarks`, the IDs listed by `GET /v1/vocabulary`).
     pub landmarks: String,
     /// A template name, or several comma-separated.
     pub template: String,
@@ -409,6 +409,120 @@ impl ToSchema for TemplateDocument {
     }
 }
 
+/// The landmarks document of the scan flow, batch jobs and `grade3d grade
+/// --landmarks` (issue #17, item 4): its schema generated from the feature
+/// vocabulary, every point and curve ID a property (the IDs as an enum: no
+/// other key is accepted), the points every scan must give required.
+pub struct LandmarksDocument;
+
+/// A point's coordinates: `[x, y, z]` in the document's `units`.
+fn landmark_point_schema() -> serde_json::Value {
+    serde_json::json!({"type": "array", "items": {"type": "number"}, "minItems": 3, "maxItems": 3})
+}
+
+/// [`LandmarksDocument`]'s schema as JSON.
+fn landmarks_schema_json() -> serde_json::Value {
+    use grade3d_core::body::vocab::{curve_def, point_def, required_landmarks, CurveId, PointId, VOCABULARY_VERSION};
+    let with = |mut schema: serde_json::Value, description: String| {
+        if let Some(m) = schema.as_object_mut() {
+            m.insert("description".into(), description.into());
+        }
+        schema
+    };
+    let points: serde_json::Map<String, serde_json::Value> = PointId::ALL
+        .iter()
+        .map(|&p| (p.as_str().to_owned(), with(landmark_point_schema(), point_def(p).name.to_owned())))
+        .collect();
+    let curves: serde_json::Map<String, serde_json::Value> = CurveId::ALL
+        .iter()
+        .map(|&c| {
+            let polyline = serde_json::json!({"type": "array", "items": landmark_point_schema(), "minItems": 2});
+            (
+                c.as_str().to_owned(),
+                with(polyline, format!("{}, as a polyline that replaces the derived one", curve_def(c).name)),
+            )
+        })
+        .collect();
+    let required: Vec<&str> = required_landmarks().into_iter().map(PointId::as_str).collect();
+    serde_json::json!({
+        "type": "object",
+        "description": "A body's landmarks: points of the feature vocabulary (`GET /v1/vocabulary`) on the scan, \
+            in the scan's frame (Y up, facing +Z).",
+        "required": ["vocabulary", "points"],
+        "additionalProperties": false,
+        "properties": {
+            "vocabulary": {
+                "type": "integer", "minimum": 1, "maximum": VOCABULARY_VERSION,
+                "description": "The vocabulary version the document is written in."
+            },
+            "units": {"type": "string", "enum": ["m", "cm", "mm"], "description": "Length unit (default m)."},
+            "points": {
+                "type": "object", "properties": points, "required": required, "additionalProperties": false,
+                "description": "Landmarks by point ID."
+            },
+            "curves": {
+                "type": "object", "properties": curves, "additionalProperties": false,
+                "description": "Optional curves by curve ID, each replacing the one derived from the points."
+            }
+        }
+    })
+}
+
+impl utoipa::PartialSchema for LandmarksDocument {
+    fn schema() -> RefOr<Schema> {
+        // built from compiled-in tables and checked by a test: the fallback cannot happen at run time
+        serde_json::from_value(landmarks_schema_json()).unwrap_or_else(|_| utoipa::openapi::ObjectBuilder::new().into())
+    }
+}
+
+impl ToSchema for LandmarksDocument {
+    fn name() -> std::borrow::Cow<'static, str> {
+        "Landmarks".into()
+    }
+}
+
+/// The feature vocabulary (`GET /v1/vocabulary`, issue #17, item 4): the
+/// points and curves a body is described by, which points a landmarks
+/// document must give, and which templates place nodes on each point.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+pub struct Vocabulary {
+    /// The version landmarks documents are written in.
+    pub version: u32,
+    /// The point IDs every landmarks document must give (the curves'
+    /// landmarks), in ID order.
+    pub landmarks: Vec<String>,
+    /// Every point, in ID order.
+    pub points: Vec<VocabularyPoint>,
+    /// Every curve, in ID order.
+    pub curves: Vec<VocabularyCurve>,
+}
+
+/// A point of the vocabulary: the crossing of two curves.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+pub struct VocabularyPoint {
+    /// Its ID, as landmarks documents and templates name it.
+    pub id: String,
+    /// What it is, in ISO 8559-1 terms where the standard names it.
+    pub name: String,
+    /// Whether a landmarks document must give it.
+    pub landmark: bool,
+    /// The two curves it lies on.
+    pub curves: [String; 2],
+    /// The live templates with a node on it.
+    pub templates: Vec<String>,
+}
+
+/// A curve of the vocabulary.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+pub struct VocabularyCurve {
+    /// Its ID.
+    pub id: String,
+    /// What it is.
+    pub name: String,
+    /// The landmarks it is derived from (none: it follows from other curves).
+    pub landmarks: Vec<String>,
+}
+
 /// Adds the API-key security scheme.
 struct ApiKey;
 
@@ -449,7 +563,7 @@ the offending field.\n\nGenerated from the code (`grade3d openapi`); do not edit
         (name = "jobs", description = "Batch jobs"),
     ),
     components(
-        schemas(Problem, Report),
+        schemas(Problem, Report, LandmarksDocument),
         responses(
             BadRequest, Unauthorized, Forbidden, NotFound, Conflict, TooLarge, UnsupportedMedia,
             Unprocessable, Unavailable, Internal, ArtefactBytes

@@ -313,6 +313,7 @@ pub fn routes() -> OpenApiRouter<AppState> {
         .routes(routes!(healthz))
         .routes(routes!(readyz))
         .routes(routes!(metrics_text))
+        .routes(routes!(get_vocabulary))
         .routes(routes!(list_templates, create_template))
         .routes(routes!(get_template, replace_template, delete_template))
         .routes(routes!(grade_size_chart))
@@ -535,6 +536,67 @@ fn resolve_templates_now(s: &AppState, names: &[String], field: &str) -> Result<
         out.push((v, json, t));
     }
     Ok(out)
+}
+
+// --- vocabulary ----------------------------------------------------------------------------
+
+/// The feature vocabulary: every point and curve, the landmarks a scan must
+/// give, and the live templates that place nodes on each point.
+#[utoipa::path(get, path = "/v1/vocabulary", tag = "templates", operation_id = "getVocabulary",
+    security((), ("apiKey" = [])),
+    responses(
+        (status = 200, description = "The vocabulary; landmarks documents follow the `Landmarks` schema.",
+            body = api::Vocabulary),
+        (status = 401, response = api::Unauthorized),
+        (status = 403, response = api::Forbidden),
+        (status = 500, response = api::Internal),
+    ))]
+async fn get_vocabulary(State(s): State<AppState>, headers: HeaderMap) -> Result<Json<api::Vocabulary>, Problem> {
+    check_key(&s, &headers, false)?;
+    let templates = off_executor(move || {
+        let mut out = Vec::new();
+        for e in s.0.store.list()? {
+            out.push(s.0.store.get(&e.name, None)?.1);
+        }
+        Ok(out)
+    })
+    .await?;
+    Ok(Json(vocabulary(&templates)))
+}
+
+/// The vocabulary document of [`get_vocabulary`] for `templates`.
+fn vocabulary(templates: &[crate::template::format::Template]) -> api::Vocabulary {
+    use crate::body::vocab::{CurveRule, PointId, CURVES, POINTS, VOCABULARY_VERSION};
+    let landmarks = crate::body::vocab::required_landmarks();
+    let ids = |points: &[PointId]| points.iter().map(|p| p.as_str().to_owned()).collect::<Vec<_>>();
+    api::Vocabulary {
+        version: VOCABULARY_VERSION,
+        landmarks: ids(&landmarks),
+        points: POINTS
+            .iter()
+            .map(|p| api::VocabularyPoint {
+                id: p.id.as_str().to_owned(),
+                name: p.name.to_owned(),
+                landmark: landmarks.contains(&p.id),
+                curves: [p.f1.as_str().to_owned(), p.f2.as_str().to_owned()],
+                templates: templates
+                    .iter()
+                    .filter(|t| t.nodes.iter().any(|n| n.point == p.id))
+                    .map(|t| t.name.clone())
+                    .collect(),
+            })
+            .collect(),
+        curves: CURVES
+            .iter()
+            .map(|c| api::VocabularyCurve {
+                id: c.id.as_str().to_owned(),
+                name: c.name.to_owned(),
+                landmarks: match c.rule {
+                    CurveRule::Section { landmarks, .. } | CurveRule::Path { landmarks, .. } => ids(landmarks),
+                },
+            })
+            .collect(),
+    }
 }
 
 // --- templates -----------------------------------------------------------------------------
