@@ -1450,7 +1450,7 @@ mod tests {
                 assert!(!text.contains("no such route"), "{method} {path} is documented but not routed: {text}");
             }
         }
-        assert_eq!(operations, 15, "the service's 15 operations");
+        assert_eq!(operations, 16, "the service's 16 operations");
         // the reverse: no route bypasses the documented list
         let code = include_str!("lib.rs");
         let code = &code[..code.find("#[cfg(test)]").unwrap_or(code.len())];
