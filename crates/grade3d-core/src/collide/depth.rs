@@ -144,9 +144,12 @@ pub fn encode_depth(view: &View, world: f64) -> [u8; 4] {
 }
 
 /// The pixel of [`encode_depth`] for clip depth `z` (clamped to `[0, 1]`):
-/// code `round(z (2²⁴ − 1))`, covered.
+/// code `round(z (2²⁴ − 1))`, covered. Rounded as `⌊v + ½⌋` (`v ≥ 0`): a
+/// cast, not a call to `round` — the CPU rasteriser encodes every covered
+/// pixel with it.
+#[inline]
 pub fn encode_depth_code(z: f64) -> [u8; 4] {
-    let code = (z.clamp(0.0, 1.0) * DEPTH_CODES).round() as u32;
+    let code = (z.clamp(0.0, 1.0) * DEPTH_CODES + 0.5) as u32;
     [(code >> 16) as u8, (code >> 8) as u8, code as u8, 255]
 }
 
@@ -323,9 +326,11 @@ impl DepthMap {
 }
 
 /// A normal as the renderer stores it: each component `n·½ + ½` in unorm8,
-/// `round(255 (n·½ + ½))`, in RGB.
+/// `round(255 (n·½ + ½))`, in RGB (rounded as `⌊v + ½⌋`, as
+/// [`encode_depth_code`]).
+#[inline]
 pub fn encode_normal(n: [f32; 3]) -> [u8; 4] {
-    let c = n.map(|c| ((c.clamp(-1.0, 1.0) * 0.5 + 0.5) * 255.0).round() as u8);
+    let c = n.map(|c| (c.clamp(-1.0, 1.0) * 127.5 + 128.0) as u8);
     [c[0], c[1], c[2], 255]
 }
 

@@ -23,10 +23,8 @@
 //! their depth (single precision, as a GPU's depth buffer) and their face;
 //! the normal stored is the face's vertex normals interpolated at the pixel
 //! centre and normalised (as the wgpu fragment shader does). Depth and
-//! normal are encoded as the wgpu renderer stores them: the bytes of
-//! [`encode_depth_code`] and [`encode_normal`], rounded as `⌊v + ½⌋` (the
-//! values are ≥ 0 there; it differs from their `round` only on a
-//! floating-point tie).
+//! normal are encoded as the wgpu renderer stores them
+//! ([`encode_depth_code`], [`encode_normal`]).
 //!
 //! The image is cut into bands of 32 rows (`BAND_ROWS`); each triangle is
 //! binned into the bands its rows reach, and the bands are rasterised side
@@ -53,9 +51,7 @@
 use glam::DVec3;
 use rayon::prelude::*;
 
-#[cfg(doc)]
-use super::depth::{encode_depth_code, encode_normal};
-use super::depth::{BandRows, DepthMap, View, DEPTH_CODES};
+use super::depth::{encode_depth_code, encode_normal, BandRows, DepthMap, View};
 use super::{DepthRenderer, RenderOptions};
 use crate::geom::mesh::TriMesh;
 
@@ -302,16 +298,9 @@ fn rasterise_band(
     let normal_at = |face: u32, x: usize, y: usize| -> [u8; 4] {
         let Some(Some(sc)) = scans.get(face as usize) else { return [0; 4] };
         let [n0, nx, ny] = sc.normal;
-        let n = (n0 + nx * (x as f32 + 0.5) + ny * (y as f32 + 0.5)).normalize_or_zero();
-        // encode_normal's bytes, rounding by truncation of `+ ½` (its arguments are ≥ 0)
-        let byte = |c: f32| (c.clamp(-1.0, 1.0) * 127.5 + 128.0) as u8;
-        [byte(n.x), byte(n.y), byte(n.z), 255]
+        encode_normal((n0 + nx * (x as f32 + 0.5) + ny * (y as f32 + 0.5)).normalize_or_zero().to_array())
     };
-    // encode_depth_code's bytes, rounding by truncation of `+ ½` (z ≥ 0 on covered pixels)
-    let depth = |z: f32| {
-        let code = (f64::from(z).clamp(0.0, 1.0) * DEPTH_CODES + 0.5) as u32;
-        [(code >> 16) as u8, (code >> 8) as u8, code as u8, 255]
-    };
+    let depth = |z: f32| encode_depth_code(f64::from(z));
     let runs: Vec<Option<(usize, usize)>> = rows
         .clone()
         .map(|y| {
