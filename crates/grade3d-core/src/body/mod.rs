@@ -5,5 +5,6 @@ pub mod contact;
 pub mod derive;
 pub mod ease;
 pub mod feature;
+pub mod frame;
 pub mod measure;
 pub mod vocab;

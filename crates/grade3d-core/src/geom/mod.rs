@@ -6,6 +6,7 @@ pub mod mesh;
 pub mod plane;
 pub mod polyline;
 pub mod query;
+pub mod repair;
 pub mod simplify;
 pub mod slice;
 pub mod topology;
