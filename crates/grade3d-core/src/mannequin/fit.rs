@@ -317,7 +317,7 @@ fn quick_measure(
 /// with partial pivoting (faer, issue #16: no hand-written elimination);
 /// `None` if `a` is not square of `b`'s size, singular (a pivot below
 /// 1e-300) or the solution is not finite.
-fn solve_dense(a: Vec<Vec<f64>>, b: Vec<f64>) -> Option<Vec<f64>> {
+pub(crate) fn solve_dense(a: Vec<Vec<f64>>, b: Vec<f64>) -> Option<Vec<f64>> {
     use faer::linalg::solvers::Solve;
     let n = b.len();
     if a.len() != n || a.iter().any(|row| row.len() != n) {

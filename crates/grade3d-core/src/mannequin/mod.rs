@@ -6,4 +6,5 @@ pub mod fixtures;
 pub mod landmarks;
 pub mod model;
 pub mod population;
+pub mod register;
 pub mod size_chart;
