@@ -10,7 +10,7 @@
 //! the `xtask` crate (`cargo xtask data …`). Data flow and module map:
 //! `ARCHITECTURE.md`.
 
-pub use grade3d_core::{body, geom, mannequin, pattern, pipeline, refine, template};
+pub use grade3d_core::{body, geom, mannequin, pattern, pipeline, refine, scan, template};
 pub use grade3d_io as io;
 pub use grade3d_service as service;
 pub use grade3d_service::collide;

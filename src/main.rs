@@ -68,7 +68,7 @@ enum Command {
     },
 }
 
-/// `grade3d grade`: a size chart (`--chart`) or scans (`--scan` with `--landmarks`).
+/// `grade3d grade`: a size chart (`--chart`) or scans (`--scan`, optionally with `--landmarks`).
 #[derive(clap::Args)]
 struct GradeArgs {
     /// The size chart, CSV or JSON (the service's `POST /v1/grade/size-chart` flow).
@@ -77,9 +77,20 @@ struct GradeArgs {
     /// A body scan, GLB (repeat for several bodies: a run whose nests span them).
     #[arg(long)]
     scan: Vec<PathBuf>,
-    /// The landmarks JSON of each `--scan`, in the same order.
+    /// The landmarks JSON of each `--scan`, in the same order; none at all:
+    /// every landmark is read off the body model registered to each scan.
     #[arg(long)]
     landmarks: Vec<PathBuf>,
+    /// The scans' units: m, cm or mm. Default: found from each scan's height.
+    #[arg(long, value_parser = ["m", "cm", "mm"])]
+    units: Option<String>,
+    /// The scans' up axis: +y or +z. Default: the longer of the two extents.
+    #[arg(long, value_parser = ["+y", "+z"], allow_hyphen_values = true)]
+    up: Option<String>,
+    /// The direction the bodies face, in the scans' axes: +x, -x, +y, -y, +z or -z.
+    /// Default: where the feet point.
+    #[arg(long, value_parser = ["+x", "-x", "+y", "-y", "+z", "-z"], allow_hyphen_values = true)]
+    facing: Option<String>,
     /// Templates: built-in names or template JSON files, comma-separated.
     #[arg(long, value_delimiter = ',', required = true)]
     templates: Vec<String>,
@@ -257,25 +268,50 @@ fn grade_offline(args: &GradeArgs) -> Result<(), Box<dyn std::error::Error>> {
         work::size_chart(&ctx, &templates, &chart, args.base_size.as_deref(), created, &progress)
             .map_err(|e| fail(e, chart_path))?
     } else {
-        if args.landmarks.len() != args.scan.len() {
+        if !args.landmarks.is_empty() && args.landmarks.len() != args.scan.len() {
             return Err(bad(format!(
-                "{} --scan but {} --landmarks: give one landmarks file per scan",
+                "{} --scan but {} --landmarks: give one landmarks file per scan, or none",
                 args.scan.len(),
                 args.landmarks.len()
             )));
         }
+        // the values are the options' own (clap checked them), named as the API names them
+        use grade3d::body::frame::{Axis, FrameHints, Units};
+        let axis = |v: &str| match v {
+            "+x" => Some(Axis::PosX),
+            "-x" => Some(Axis::NegX),
+            "+y" => Some(Axis::PosY),
+            "-y" => Some(Axis::NegY),
+            "+z" => Some(Axis::PosZ),
+            "-z" => Some(Axis::NegZ),
+            _ => None,
+        };
+        let units = |v: &str| match v {
+            "m" => Some(Units::Metres),
+            "cm" => Some(Units::Centimetres),
+            "mm" => Some(Units::Millimetres),
+            _ => None,
+        };
+        let hints = FrameHints {
+            units: args.units.as_deref().and_then(units),
+            up: args.up.as_deref().and_then(axis),
+            facing: args.facing.as_deref().and_then(axis),
+        };
         let mut bodies = Vec::with_capacity(args.scan.len());
-        for (scan, lm) in args.scan.iter().zip(&args.landmarks) {
+        for (i, scan) in args.scan.iter().enumerate() {
+            let lm = args.landmarks.get(i).map(|l| text(l)).transpose()?;
             // one scan is named as the service names it; several by their file stems
             let name = if args.scan.len() == 1 {
                 "scan".to_owned()
             } else {
                 scan.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default()
             };
-            bodies.push((name, read(scan)?, text(lm)?, scan.clone()));
+            bodies.push((name, read(scan)?, lm, scan.clone()));
         }
-        let inputs: Vec<BodyInput<'_>> =
-            bodies.iter().map(|(n, g, l, _)| BodyInput { name: n, glb: g, landmarks: l }).collect();
+        let inputs: Vec<BodyInput<'_>> = bodies
+            .iter()
+            .map(|(n, g, l, _)| BodyInput { name: n, glb: g, landmarks: l.as_deref(), hints })
+            .collect();
         let first = args.scan.first().cloned().unwrap_or_default();
         work::bodies(&ctx, &templates, &inputs, args.base_size.as_deref(), created, &progress)
             .map_err(|e| fail(e, &first))?

@@ -20,4 +20,5 @@ pub mod pattern;
 pub mod pipeline;
 pub mod refine;
 pub mod report;
+pub mod scan;
 pub mod template;

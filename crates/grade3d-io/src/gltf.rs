@@ -427,6 +427,15 @@ pub enum GltfError {
 /// Reads every triangle primitive of the default scene of a GLB or embedded glTF file into one
 /// world-space [`TriMesh`]. See the module documentation for the exact contract.
 pub fn read_mesh(bytes: &[u8], opts: &GltfReadOptions) -> Result<TriMesh, GltfError> {
+    let (positions, triangles) = read_soup(bytes, opts)?;
+    Ok(TriMesh::from_raw(positions, &triangles)?)
+}
+
+/// [`read_mesh`] without the mesh's validation: world-space positions and
+/// triangles as the file has them (indices checked against their
+/// primitive's vertex count), for a scan that is repaired before it is
+/// validated (`grade3d_core::geom::repair`, issue #17).
+pub fn read_soup(bytes: &[u8], opts: &GltfReadOptions) -> Result<(Vec<DVec3>, Vec<[u64; 3]>), GltfError> {
     if bytes.len() > opts.max_bytes {
         return Err(GltfError::InputTooLarge { len: bytes.len(), max: opts.max_bytes });
     }
@@ -497,7 +506,7 @@ pub fn read_mesh(bytes: &[u8], opts: &GltfReadOptions) -> Result<TriMesh, GltfEr
     if triangles.is_empty() {
         return Err(GltfError::NoTriangles);
     }
-    Ok(TriMesh::from_raw(positions, &triangles)?)
+    Ok((positions, triangles))
 }
 
 /// The triangle-based primitives of a mesh with their modes; point and line primitives are left out.

@@ -123,11 +123,21 @@ pub struct VersionQuery {
 /// Multipart body of `POST /v1/grade/scan`.
 #[derive(Debug, ToSchema)]
 pub struct ScanUpload {
-    /// The scan: GLB, or glTF with embedded buffers; metres, Y up, facing +Z.
+    /// The scan: GLB, or glTF with embedded buffers, as the scanner gives it: metres, centimetres or
+    /// millimetres, +Y or +Z up, any facing (each found unless stated), holes, degenerate and duplicate
+    /// triangles (repaired and counted in the report's `scan.repair`).
     #[schema(value_type = String, format = Binary)]
     pub scan: Vec<u8>,
-    /// The landmarks document (JSON; its schema: `Landmarks`, the IDs listed by `GET /v1/vocabulary`).
-    pub landmarks: String,
+    /// The landmarks document (JSON; its schema: `Landmarks`, the IDs listed by `GET /v1/vocabulary`),
+    /// optional: landmarks it lacks are read off the body model registered to the scan, and the report's
+    /// `scan.registration` gives the residual and a confidence per landmark.
+    pub landmarks: Option<String>,
+    /// The scan's units: `m`, `cm` or `mm` (default: found from its height).
+    pub units: Option<grade3d_core::body::frame::Units>,
+    /// Its up axis: `+y` or `+z` (default: the longer of the two extents).
+    pub up: Option<grade3d_core::body::frame::Axis>,
+    /// The direction the body faces, in the scan's axes (default: where its feet point).
+    pub facing: Option<grade3d_core::body::frame::Axis>,
     /// A template name, or several comma-separated.
     pub template: String,
 }

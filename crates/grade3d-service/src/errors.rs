@@ -9,6 +9,10 @@ use super::problem::Problem;
 use super::store::StoreError;
 use super::work::WorkError;
 use crate::body::derive::FeatureError;
+use crate::body::frame::FrameError;
+use crate::geom::repair::RepairError;
+use crate::mannequin::register::RegisterError;
+use grade3d_core::scan::ScanError;
 use crate::geom::topology::TopologyError;
 use crate::io::gltf::GltfError;
 use crate::io::landmarks::LandmarkFileError;
@@ -135,6 +139,38 @@ fn gltf_problem(e: &GltfError, field: &str, detail: String) -> Problem {
     Problem::new(status, "scan-invalid", "Invalid body scan", detail).field(field)
 }
 
+/// A scan that could not be repaired, framed or registered (issue #17):
+/// the mesh's own faults a 400, what it is as a body a 422 naming the
+/// figure; every variant of each step's error in one match.
+fn scan_problem(e: &ScanError, detail: String) -> Problem {
+    match e {
+        ScanError::Repair(RepairError::Mesh(_)) => Problem::bad_request("scan-invalid", detail).field("scan"),
+        ScanError::Repair(RepairError::NothingLeft { .. }) => {
+            Problem::unprocessable("scan-nothing-left", detail).field("scan")
+        }
+        ScanError::Frame(f) => {
+            let (slug, field) = match f {
+                FrameError::Mesh(_) => ("scan-invalid", "scan"),
+                FrameError::Axes { what: "up", .. } => ("scan-axes", "up"),
+                FrameError::Axes { .. } => ("scan-axes", "facing"),
+                FrameError::Units { .. } => ("scan-units", "units"),
+                FrameError::Facing { .. } => ("scan-facing", "facing"),
+                FrameError::Pose { .. } => ("scan-pose", "scan"),
+            };
+            Problem::unprocessable(slug, detail).field(field)
+        }
+        ScanError::Register(r) => match r {
+            RegisterError::Residual { .. } | RegisterError::TooFewPairs { .. } => {
+                Problem::unprocessable("scan-registration", detail).field("landmarks")
+            }
+            RegisterError::Landmark(_) => Problem::unprocessable("scan-registration-landmark", detail).field("landmarks"),
+            RegisterError::Model(_) => internal(&detail),
+        },
+        ScanError::Model(_) => internal(&detail),
+        ScanError::Feature(f) => Problem::unprocessable(feature_slug(f), detail).field("landmarks"),
+    }
+}
+
 fn feature_slug(e: &FeatureError) -> &'static str {
     match e {
         FeatureError::Mesh { .. } => "body-mesh",
@@ -183,6 +219,7 @@ impl From<WorkError> for Problem {
             WorkError::Feature { source, .. } => {
                 Problem::unprocessable(feature_slug(source), detail).field("landmarks")
             }
+            WorkError::ScanBody { source, .. } => scan_problem(source, detail),
             WorkError::TooManyVertices { .. } => {
                 Problem::new(StatusCode::PAYLOAD_TOO_LARGE, "scan-too-many-vertices", "Body scan too large", detail)
                     .field("scan")

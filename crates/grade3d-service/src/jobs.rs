@@ -29,9 +29,20 @@ pub struct JobBody {
     /// The scan, GLB, base64 (standard alphabet). Emptied when the job ends.
     #[serde(default)]
     pub glb_base64: String,
-    /// Its landmarks document.
-    #[schema(value_type = Object)]
-    pub landmarks: serde_json::Value,
+    /// Its landmarks document: all, some or none of the vocabulary's points
+    /// (those missing are found by registering the body model to the scan).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[schema(value_type = Option<Object>)]
+    pub landmarks: Option<serde_json::Value>,
+    /// The scan's units (default: found from its height).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub units: Option<grade3d_core::body::frame::Units>,
+    /// Its up axis, `+y` or `+z` (default: found).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub up: Option<grade3d_core::body::frame::Axis>,
+    /// The direction it faces, in its own axes (default: found from the feet).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub facing: Option<grade3d_core::body::frame::Axis>,
 }
 
 /// What a job grades: exactly one of a size chart and bodies, times templates.

@@ -16,6 +16,7 @@
 //! (`grade3d-render`); the core's modules are named here as `crate::geom`
 //! and the like, as they were when this was one crate.
 
+use grade3d_core::body::frame::FrameHints;
 use grade3d_core::{body, geom, mannequin, pattern, pipeline, refine, template};
 use grade3d_io as io;
 
@@ -921,20 +922,22 @@ fn unsupported_media(what: &str) -> Problem {
 async fn grade_scan(State(s): State<AppState>, headers: HeaderMap, req: Request) -> Result<Response, Problem> {
     check_key(&s, &headers, false)?;
     if !media_is(&headers, "multipart/form-data") {
-        return Err(unsupported_media("multipart/form-data with parts scan, landmarks and template"));
+        return Err(unsupported_media("multipart/form-data with parts scan, template and optionally landmarks"));
     }
     let (parts, body) = req.into_parts();
     let bytes = body_bytes(&s, &headers, body).await?;
     let req = Request::from_parts(parts, axum::body::Body::from(bytes));
-    let ScanParts { scan, landmarks, templates } = read_scan_parts(req, s.0.cfg.max_body_bytes).await?;
+    let ScanParts { scan, landmarks, templates, hints } = read_scan_parts(req, s.0.cfg.max_body_bytes).await?;
     let templates = resolve_templates(&s, &templates, "template").await?;
-    let mut parts: Vec<&[u8]> = vec![b"scan", &scan, landmarks.as_bytes()];
+    // the stated hints and whether landmarks came are part of the input
+    let stated = serde_json::to_string(&(&hints, landmarks.is_some())).unwrap_or_default();
+    let mut parts: Vec<&[u8]> = vec![b"scan", &scan, landmarks.as_deref().unwrap_or("").as_bytes(), stated.as_bytes()];
     parts.extend(templates.iter().map(|(_, json, _)| json.as_bytes()));
     let id = content_id(&parts);
     let ts: Vec<Template> = templates.into_iter().map(|(_, _, t)| t).collect();
     let ttl = Duration::from_secs(s.0.cfg.scan_ttl_s);
     run_flow(&s, id, report::Flow::Scan, Some(ttl), move |ctx| {
-        work::scan(ctx, &ts, &BodyInput { name: "scan", glb: &scan, landmarks: &landmarks })
+        work::scan(ctx, &ts, &BodyInput { name: "scan", glb: &scan, landmarks: landmarks.as_deref(), hints })
     })
     .await
 }
@@ -944,14 +947,24 @@ async fn grade_scan(State(s): State<AppState>, headers: HeaderMap, req: Request)
 pub struct ScanParts {
     /// The scan's bytes (GLB or glTF).
     pub scan: Bytes,
-    /// The landmarks document.
-    pub landmarks: String,
+    /// The landmarks document, if given.
+    pub landmarks: Option<String>,
     /// The template names, in order.
     pub templates: Vec<String>,
+    /// The scan's units, up axis and facing, where stated.
+    pub hints: FrameHints,
 }
 
-/// Reads a scan upload (`multipart/form-data` with the parts `scan`,
-/// `landmarks` and `template`) whose body is already within the limit
+/// A stated unit or axis (a text part): its JSON name, e.g. `mm` or `+z`.
+fn hint_part<T: serde::de::DeserializeOwned>(name: &str, data: &[u8], allowed: &str) -> Result<T, Problem> {
+    let text = std::str::from_utf8(data).unwrap_or("").trim().to_owned();
+    serde_json::from_value(serde_json::Value::String(text.clone())).map_err(|_| {
+        Problem::bad_request("invalid-part", format!("part `{name}` is `{text}`; allowed: {allowed}")).field(name)
+    })
+}
+
+/// Reads a scan upload (`multipart/form-data` with the parts `scan` and
+/// `template`, and optionally `landmarks`, `units`, `up` and `facing`) whose body is already within the limit
 /// `max` (named in a 413 should the multipart reader raise one): every
 /// refusal a 400 naming the part.
 ///
@@ -963,6 +976,7 @@ pub async fn read_scan_parts(req: Request, max: usize) -> Result<ScanParts, Prob
         .await
         .map_err(|e| Problem::bad_request("invalid-multipart", e.body_text()).field("body"))?;
     let (mut scan, mut landmarks, mut templates) = (None, None, Vec::new());
+    let mut hints = FrameHints::default();
     loop {
         let field = match mp.next_field().await {
             Ok(Some(f)) => f,
@@ -987,6 +1001,9 @@ pub async fn read_scan_parts(req: Request, max: usize) -> Result<ScanParts, Prob
         match name.as_str() {
             "scan" => scan = Some(data),
             "landmarks" => landmarks = Some(data),
+            "units" => hints.units = Some(hint_part(&name, &data, "m, cm, mm")?),
+            "up" => hints.up = Some(hint_part(&name, &data, "+y, +z")?),
+            "facing" => hints.facing = Some(hint_part(&name, &data, "+x, -x, +y, -y, +z, -z")?),
             "template" => {
                 let t = std::str::from_utf8(&data)
                     .map_err(|_| Problem::bad_request("not-utf8", "template names are UTF-8").field("template"))?;
@@ -1000,10 +1017,10 @@ pub async fn read_scan_parts(req: Request, max: usize) -> Result<ScanParts, Prob
     let scan =
         scan.ok_or_else(|| Problem::bad_request("missing-part", "the `scan` part (GLB) is missing").field("scan"))?;
     let landmarks = landmarks
-        .ok_or_else(|| Problem::bad_request("missing-part", "the `landmarks` part is missing").field("landmarks"))?;
-    let landmarks = String::from_utf8(landmarks.to_vec())
+        .map(|l| String::from_utf8(l.to_vec()))
+        .transpose()
         .map_err(|_| Problem::bad_request("not-utf8", "the landmarks are not UTF-8 JSON").field("landmarks"))?;
-    Ok(ScanParts { scan, landmarks, templates })
+    Ok(ScanParts { scan, landmarks, templates, hints })
 }
 
 fn stored_result(s: &AppState, id: &str) -> Result<Arc<Stored>, Problem> {
@@ -1325,10 +1342,13 @@ fn run_job_work(s: &AppState, r: &JobRecord) -> Result<Outcome, Problem> {
             let glb = base64::engine::general_purpose::STANDARD
                 .decode(&b.glb_base64)
                 .map_err(|e| Problem::bad_request("invalid-base64", e.to_string()))?;
-            decoded.push((b.name.clone(), glb, b.landmarks.to_string()));
+            let hints = FrameHints { units: b.units, up: b.up, facing: b.facing };
+            decoded.push((b.name.clone(), glb, b.landmarks.as_ref().map(ToString::to_string), hints));
         }
-        let inputs: Vec<BodyInput<'_>> =
-            decoded.iter().map(|(n, g, l)| BodyInput { name: n, glb: g, landmarks: l }).collect();
+        let inputs: Vec<BodyInput<'_>> = decoded
+            .iter()
+            .map(|(n, g, l, h)| BodyInput { name: n, glb: g, landmarks: l.as_deref(), hints: *h })
+            .collect();
         work::bodies(&ctx, &templates, &inputs, r.spec.base_size.as_deref(), Some(created), &progress)?
     };
     Ok(outcome)

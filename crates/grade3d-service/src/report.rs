@@ -15,6 +15,7 @@ use serde::{Deserialize, Serialize};
 use utoipa::ToSchema;
 
 use grade3d_core::body::derive::FeatureWarning;
+use grade3d_core::scan::ScanReport;
 use grade3d_core::mannequin::fit::Residual;
 use grade3d_core::mannequin::size_chart::{FigureType, Sex, SexSource};
 use grade3d_core::pattern::true_up::TrueReport;
@@ -103,6 +104,9 @@ pub struct BodyReport {
     pub measurements_m: BTreeMap<String, f64>,
     /// What derivation accepted but a person should look at.
     pub warnings: Vec<FeatureWarning>,
+    /// How the scan was read (issue #17): repair counts, units, axes and
+    /// pose, landmarks supplied and found, the registration's residual.
+    pub scan: ScanReport,
     /// Every template on it, in request order.
     pub garments: Vec<GarmentReport>,
 }

@@ -14,7 +14,11 @@
 //!   ([`crate::pattern::true_up`]) before the per-size patterns, the nest and
 //!   the rules are written, and the report says by how much
 //!   (`nest_truing`).
-//! - [`scan`]: one body scan with its landmarks, one template.
+//! - [`scan`]: one body scan, one or more templates. A scan comes as a
+//!   scanner gives it (issue #17): repaired, its units, up axis and facing
+//!   found, and its landmarks — where the request lacks any the vocabulary
+//!   requires — read off the embedded model registered to it
+//!   ([`grade3d_core::scan`]); the report says what was done.
 //! - [`bodies`]: many scans × templates (the batch flow's bodies part); with
 //!   several bodies the base body's dart plan is carried to the others.
 //!
@@ -30,14 +34,15 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-use crate::body::derive::{derive_features, DeriveOptions, FeatureError, Landmarks};
+use crate::body::derive::{FeatureError, Landmarks};
+use crate::body::frame::FrameHints;
 use crate::body::feature::FeatureBody;
 use crate::body::measure::{measure, MeasureOptions};
 use crate::collide::cache::{BodyKey, Obstacle, ObstacleCache};
 use crate::collide::render::{RenderError, RenderOptions, Renderer};
 use crate::geom::mesh::TriMesh;
 use crate::geom::winding::WindingOptions;
-use crate::io::gltf::{read_mesh, write_glb, GlbAttribute, GltfError, GltfReadOptions};
+use crate::io::gltf::{read_soup, write_glb, GlbAttribute, GltfError, GltfReadOptions};
 use crate::io::landmarks::{parse_landmarks, LandmarkFileError};
 use crate::mannequin::fit::{fit_graded, fit_size, FitError, FitOptions, FittedMannequin};
 use crate::mannequin::model::{BodyModel, MannequinError};
@@ -52,6 +57,7 @@ use crate::pipeline::{grade_with_plan, GradeOptions, Graded, PipelineError};
 use crate::report::{BodiesReport, BodyReport, Flow, MannequinReport, Report, SizeChartReport, SizeReport};
 use crate::store::Entry;
 use crate::template::format::Template;
+use grade3d_core::scan::{scan_body, ScanError, ScanOptions, ScanReport};
 use grade3d_core::report::{fit_report, FitReport, FitReportError, FitReportOptions, FitStep, GarmentReport};
 
 /// Why a flow failed. Client-caused variants name the offending input.
@@ -83,6 +89,14 @@ pub enum WorkError {
         body: String,
         /// Why.
         source: LandmarkFileError,
+    },
+    /// A scan could not be repaired, framed or registered.
+    #[error("body `{body}`: {source}")]
+    ScanBody {
+        /// Which body.
+        body: String,
+        /// Why (never [`ScanError::Feature`]: that is [`WorkError::Feature`]).
+        source: ScanError,
     },
     /// The feature model of a scan could not be derived.
     #[error("body `{body}`: {source}")]
@@ -190,6 +204,8 @@ pub struct WorkOptions {
     pub render: RenderOptions,
     /// Truing the size-chart flow's nests ([`crate::pattern::true_up`]).
     pub true_nest: TrueOptions,
+    /// Reading a scan: repair, frame, automatic landmarks, derivation.
+    pub scan: ScanOptions,
 }
 
 impl Default for WorkOptions {
@@ -199,6 +215,7 @@ impl Default for WorkOptions {
             grade: GradeOptions::default(),
             render: RenderOptions::default(),
             true_nest: TrueOptions::default(),
+            scan: ScanOptions::default(),
         }
     }
 }
@@ -277,28 +294,46 @@ pub struct BodyInput<'a> {
     pub name: &'a str,
     /// GLB or glTF with embedded buffers.
     pub glb: &'a [u8],
-    /// Landmarks JSON.
-    pub landmarks: &'a str,
+    /// Landmarks JSON, if given (all, some or none of the vocabulary's
+    /// points: the rest are found by registration).
+    pub landmarks: Option<&'a str>,
+    /// What the request states of the scan's units, up axis and facing.
+    pub hints: FrameHints,
 }
 
-/// Reads and checks a scan and derives its feature model.
+/// A scan read: its feature model and what reading it did.
+#[derive(Debug, Clone)]
+pub struct ReadBody {
+    /// The feature model.
+    pub body: FeatureBody,
+    /// Repair, frame and landmarks, for the report.
+    pub scan: ScanReport,
+}
+
+/// Reads and checks a scan, repairs it, brings it into the body frame,
+/// finds the landmarks it lacks and derives its feature model
+/// ([`grade3d_core::scan::scan_body`]).
 ///
 /// # Errors
-/// [`WorkError::Scan`], [`WorkError::TooManyVertices`], [`WorkError::Landmarks`], [`WorkError::Feature`].
-pub fn read_body(input: &BodyInput<'_>, opts: &WorkOptions) -> Result<FeatureBody, WorkError> {
+/// [`WorkError::Scan`], [`WorkError::TooManyVertices`], [`WorkError::Landmarks`],
+/// [`WorkError::ScanBody`], [`WorkError::Feature`].
+pub fn read_body(input: &BodyInput<'_>, opts: &WorkOptions) -> Result<ReadBody, WorkError> {
     let name = input.name.to_owned();
-    let mesh = read_mesh(input.glb, &GltfReadOptions::default())
+    let (positions, triangles) = read_soup(input.glb, &GltfReadOptions::default())
         .map_err(|source| WorkError::Scan { body: name.clone(), source })?;
-    if mesh.vertex_count() > opts.max_scan_vertices {
-        return Err(WorkError::TooManyVertices {
-            body: name,
-            vertices: mesh.vertex_count(),
-            max: opts.max_scan_vertices,
-        });
+    if positions.len() > opts.max_scan_vertices {
+        return Err(WorkError::TooManyVertices { body: name, vertices: positions.len(), max: opts.max_scan_vertices });
     }
-    let lm: Landmarks =
-        parse_landmarks(input.landmarks).map_err(|source| WorkError::Landmarks { body: name.clone(), source })?;
-    derive_features(mesh, &lm, &DeriveOptions::default()).map_err(|source| WorkError::Feature { body: name, source })
+    let lm: Option<Landmarks> = input
+        .landmarks
+        .map(parse_landmarks)
+        .transpose()
+        .map_err(|source| WorkError::Landmarks { body: name.clone(), source })?;
+    match scan_body(&positions, &triangles, &input.hints, lm.as_ref(), &opts.scan) {
+        Ok((body, scan)) => Ok(ReadBody { body, scan }),
+        Err(ScanError::Feature(source)) => Err(WorkError::Feature { body: name, source }),
+        Err(source) => Err(WorkError::ScanBody { body: name, source }),
+    }
 }
 
 /// Indices `0..total`, `base` first, then the others in order (a run grades
@@ -727,17 +762,17 @@ pub fn bodies(
     let total = inputs.len();
     let base_at = base.and_then(|b| inputs.iter().position(|i| i.name == b)).unwrap_or(0);
     // one body prepared (`done` bodies started before it): read, its features derived, its obstacle
-    let prepare_body = |(i, done): (usize, usize), timer: &mut Timer| -> Result<Prepared<FeatureBody>, WorkError> {
+    let prepare_body = |(i, done): (usize, usize), timer: &mut Timer| -> Result<Prepared<ReadBody>, WorkError> {
         progress(stage::BODY, done, total);
         let start = Instant::now();
-        let body = read_body(&inputs[i], &ctx.opts)?;
+        let read = read_body(&inputs[i], &ctx.opts)?;
         timer.add(stage::BODY, start);
-        let obstacle = ctx.obstacle(&body.mesh, false, timer)?;
-        Ok((body, obstacle))
+        let obstacle = ctx.obstacle(&read.body.mesh, false, timer)?;
+        Ok((read, obstacle))
     };
     // one body finished: every template graded on it
     let grade_one = |(i, done): (usize, usize),
-                     (body, obstacle): &Prepared<FeatureBody>,
+                     (ReadBody { body, scan }, obstacle): &Prepared<ReadBody>,
                      plans: Option<&[DartPlan]>,
                      timer: &mut Timer|
      -> Result<Done<BodyReport>, WorkError> {
@@ -753,6 +788,7 @@ pub fn bodies(
                 .collect(),
             // what derivation accepted but a person should look at (issue #13: warnings, not refusals)
             warnings: body.warnings.clone(),
+            scan: scan.clone(),
             garments: Vec::new(),
         };
         Ok((graded, about, out))

@@ -10,9 +10,10 @@
 //! 1. **Weld.** Vertices closer than [`RepairOptions::weld_share`] × the
 //!    bounding box's longest side share one (grid hashing; exact
 //!    duplicates always merge). Unused vertices are dropped.
-//! 2. **Degenerate triangles** — a repeated vertex (after welding), or an
-//!    area below [`RepairOptions::degenerate_area_share`] × the longest
-//!    side² — are dropped.
+//! 2. **Degenerate triangles** — a repeated vertex (after welding), or a
+//!    sliver whose height `2A / l` is below [`RepairOptions::sliver_ratio`]
+//!    × its longest edge `l`, or below the weld distance (three points
+//!    collinear to the precision of the file's coordinates) — are dropped.
 //! 3. **Duplicate triangles** (the same three vertices, in either
 //!    orientation) are dropped, the first kept.
 //! 4. **Components** (connected through shared vertices) whose area is
@@ -25,8 +26,10 @@
 //!    `V = Σ_f a·(b × c) / 6` is negative is turned inside out as a whole,
 //!    so that normals point out of the body.
 //! 6. **Holes** — boundary loops (armpits, crotch, soles, top of the
-//!    head: regions a scanner does not see) whose length is at most
-//!    [`RepairOptions::max_hole_share`] × the longest side — are closed by
+//!    head: regions a scanner does not see) whose extent (the diagonal of
+//!    their bounding box: a ragged outline is much longer than the hole
+//!    is wide) is at most [`RepairOptions::max_hole_share`] × the longest
+//!    side — are closed by
 //!    a fan around the loop's centroid, run against the loop so that the
 //!    fill faces agree with their neighbours' orientation. The inside
 //!    tests (winding number, depth maps) then see a closed body; a larger
@@ -55,23 +58,25 @@ pub struct RepairOptions {
     /// Default 1e-6 (2 µm on a 1.8 m body: seams split by UV or normal,
     /// never two real points of a scan).
     pub weld_share: f64,
-    /// A triangle with less area than this share of the longest side
-    /// squared is degenerate. Default 1e-14 (3e-8 mm² on a 1.8 m body: a
-    /// sliver of three collinear points, not a small real triangle).
-    pub degenerate_area_share: f64,
+    /// A triangle whose height over its longest edge is below this is
+    /// degenerate. Default 1e-4 (a 5 mm edge with a 0.5 µm height: three
+    /// points collinear but for the rounding of single-precision
+    /// coordinates, 1e-5 of the edge at a metre from the origin; no
+    /// scanner's real triangle is that thin).
+    pub sliver_ratio: f64,
     /// A connected component with less than this share of the total area
     /// is dropped. Default 0.01 (a hand is about 2 % of a body's skin).
     pub min_component_share: f64,
-    /// A hole whose boundary is at most this share of the longest side is
-    /// closed. Default 0.6 (a sole's outline is about 0.3 of the stature,
-    /// the open top of a head 0.35; a body cut off at the waist is not a
-    /// hole to close).
+    /// A hole whose extent (bounding-box diagonal) is at most this share of
+    /// the longest side is closed. Default 0.3 (a whole sole measures
+    /// 0.16–0.19 of the stature, the open crown of a head about 0.12; a
+    /// larger opening is left open and counted).
     pub max_hole_share: f64,
 }
 
 impl Default for RepairOptions {
     fn default() -> Self {
-        Self { weld_share: 1e-6, degenerate_area_share: 1e-14, min_component_share: 0.01, max_hole_share: 0.6 }
+        Self { weld_share: 1e-6, sliver_ratio: 1e-4, min_component_share: 0.01, max_hole_share: 0.3 }
     }
 }
 
@@ -98,6 +103,8 @@ pub struct RepairReport {
     pub holes_filled: usize,
     /// Openings left open (longer than the hole limit).
     pub holes_left: usize,
+    /// Triangles added to close the holes: the last ones of the mesh.
+    pub fill_triangles: usize,
     /// Vertices of the repaired mesh.
     pub vertices_out: usize,
     /// Triangles of the repaired mesh.
@@ -105,6 +112,13 @@ pub struct RepairReport {
 }
 
 impl RepairReport {
+    /// Per triangle of the repaired mesh: whether it was read (true) or
+    /// added to close a hole (false).
+    pub fn read_faces(&self) -> Vec<bool> {
+        let read = self.triangles_out - self.fill_triangles;
+        (0..self.triangles_out).map(|f| f < read).collect()
+    }
+
     /// Whether anything was changed.
     pub fn changed(&self) -> bool {
         self.vertices_welded
@@ -162,9 +176,9 @@ pub fn repair(
     let side = (hi - lo).max_element().max(f64::MIN_POSITIVE);
 
     // 1. weld
-    let (welded, remap) = weld(positions, opts.weld_share * side);
+    let weld = opts.weld_share * side;
+    let (welded, remap) = weld_positions(positions, weld);
     // 2.-3. degenerate and duplicate triangles
-    let min_area2 = 2.0 * opts.degenerate_area_share * side * side;
     let mut tris: Vec<[u32; 3]> = Vec::with_capacity(triangles.len());
     let mut seen: FxHashMap<[u32; 3], ()> = FxHashMap::default();
     for t in triangles {
@@ -174,7 +188,9 @@ pub fn repair(
             continue;
         }
         let [a, b, c] = t.map(|i| welded[i as usize]);
-        if (b - a).cross(c - a).length() <= min_area2 {
+        let longest = a.distance(b).max(b.distance(c)).max(c.distance(a));
+        // height = 2A / l below r·l, or below the weld distance (precision of the coordinates)
+        if (b - a).cross(c - a).length() <= longest * (opts.sliver_ratio * longest).max(weld) {
             report.degenerate_dropped += 1;
             continue;
         }
@@ -216,8 +232,8 @@ pub fn repair(
     let limit = opts.max_hole_share * side;
     for lp in boundary_loops(&tris) {
         let ring: Vec<DVec3> = lp.iter().map(|&v| pos[v as usize]).collect();
-        let length: f64 = (0..ring.len()).map(|i| ring[i].distance(ring[(i + 1) % ring.len()])).sum();
-        if lp.len() < 3 || length > limit {
+        let (lo, hi) = ring.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+        if lp.len() < 3 || lo.distance(hi) > limit {
             report.holes_left += 1;
             continue;
         }
@@ -228,6 +244,7 @@ pub fn repair(
         for i in 0..lp.len() {
             tris.push([lp[(i + 1) % lp.len()], lp[i], c]);
         }
+        report.fill_triangles += lp.len();
         report.holes_filled += 1;
     }
     report.vertices_welded = positions.len() - welded.len();
@@ -239,7 +256,7 @@ pub fn repair(
 
 /// Welds positions within `tolerance` (grid hashing, first come first
 /// served); returns the kept positions and each input vertex's new index.
-fn weld(positions: &[DVec3], tolerance: f64) -> (Vec<DVec3>, Vec<u32>) {
+fn weld_positions(positions: &[DVec3], tolerance: f64) -> (Vec<DVec3>, Vec<u32>) {
     let cell = tolerance.max(f64::MIN_POSITIVE);
     let key = |p: DVec3| -> [i64; 3] {
         let q = (p / cell).floor();
@@ -527,7 +544,7 @@ mod tests {
         assert!(agree as f64 >= 0.99 * total as f64, "{agree} of {total}");
         assert!(repaired.winding_number(DVec3::new(0.0, 0.95, 0.0)) > 0.5, "inside at a filled pole");
         // a hole longer than the limit stays open, counted
-        let strict = RepairOptions { max_hole_share: 0.1, ..Default::default() };
+        let strict = RepairOptions { max_hole_share: 0.05, ..Default::default() };
         let (m, r) = repair(&p, &cut, &strict).expect("repairs");
         assert_eq!((r.holes_filled, r.holes_left), (0, 2));
         assert_eq!(boundary_loops(m.triangles()).len(), 2);
