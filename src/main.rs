@@ -308,10 +308,8 @@ fn grade_offline(args: &GradeArgs) -> Result<(), Box<dyn std::error::Error>> {
             };
             bodies.push((name, read(scan)?, lm, scan.clone()));
         }
-        let inputs: Vec<BodyInput<'_>> = bodies
-            .iter()
-            .map(|(n, g, l, _)| BodyInput { name: n, glb: g, landmarks: l.as_deref(), hints })
-            .collect();
+        let inputs: Vec<BodyInput<'_>> =
+            bodies.iter().map(|(n, g, l, _)| BodyInput { name: n, glb: g, landmarks: l.as_deref(), hints }).collect();
         let first = args.scan.first().cloned().unwrap_or_default();
         work::bodies(&ctx, &templates, &inputs, args.base_size.as_deref(), created, &progress)
             .map_err(|e| fail(e, &first))?

@@ -143,9 +143,14 @@ mod tests {
         let model = BodyModel::embedded().expect("model");
         let mesh = model.build(&MannequinParams::default()).expect("body");
         let lm = hm08_landmarks(model, &mesh, &Hm08LandmarkOptions::default()).expect("landmarks");
-        let (body, r) =
-            scan_body(mesh.positions(), &soup(mesh.triangles()), &FrameHints::default(), Some(&lm), &ScanOptions::default())
-                .expect("a feature body");
+        let (body, r) = scan_body(
+            mesh.positions(),
+            &soup(mesh.triangles()),
+            &FrameHints::default(),
+            Some(&lm),
+            &ScanOptions::default(),
+        )
+        .expect("a feature body");
         assert!(!r.repair.changed(), "{:?}", r.repair);
         assert_eq!((r.landmarks_supplied, r.landmarks_found, r.registration.is_none()), (lm.points.len(), 0, true));
         assert_eq!(body.mesh.vertex_count(), mesh.vertex_count());
@@ -162,8 +167,14 @@ mod tests {
         let mut given = Landmarks::default();
         let crotch = truth.points[&PointId::Crotch];
         given.points.insert(PointId::Crotch, z_up * crotch);
-        let (body, r) = scan_body(&positions, &soup(mesh.triangles()), &FrameHints::default(), Some(&given), &ScanOptions::default())
-            .expect("a feature body");
+        let (body, r) = scan_body(
+            &positions,
+            &soup(mesh.triangles()),
+            &FrameHints::default(),
+            Some(&given),
+            &ScanOptions::default(),
+        )
+        .expect("a feature body");
         assert_eq!((r.frame.units, r.frame.up, r.frame.facing), (Units::Millimetres, Axis::PosZ, Axis::NegY));
         assert_eq!(r.landmarks_supplied, 1);
         assert_eq!(r.landmarks_found, truth.points.len() - 1);

@@ -11,12 +11,11 @@ use super::work::WorkError;
 use crate::body::derive::FeatureError;
 use crate::body::frame::FrameError;
 use crate::geom::repair::RepairError;
-use crate::mannequin::register::RegisterError;
-use grade3d_core::scan::ScanError;
 use crate::geom::topology::TopologyError;
 use crate::io::gltf::GltfError;
 use crate::io::landmarks::LandmarkFileError;
 use crate::mannequin::fit::FitError;
+use crate::mannequin::register::RegisterError;
 use crate::mannequin::size_chart::SizeChartError;
 use crate::pattern::assemble::PieceError;
 use crate::pattern::export::rul::CreatedError;
@@ -29,6 +28,7 @@ use crate::refine::subdivide::RefineError;
 use crate::template::codec::CodecError;
 use crate::template::format::TemplateError;
 use crate::template::profile::ProfileError;
+use grade3d_core::scan::ScanError;
 
 fn internal(what: &dyn std::fmt::Display) -> Problem {
     tracing::error!(error = %what, "internal error");
@@ -163,7 +163,9 @@ fn scan_problem(e: &ScanError, detail: String) -> Problem {
             RegisterError::Residual { .. } | RegisterError::TooFewPairs { .. } => {
                 Problem::unprocessable("scan-registration", detail).field("landmarks")
             }
-            RegisterError::Landmark(_) => Problem::unprocessable("scan-registration-landmark", detail).field("landmarks"),
+            RegisterError::Landmark(_) => {
+                Problem::unprocessable("scan-registration-landmark", detail).field("landmarks")
+            }
             RegisterError::Model(_) => internal(&detail),
         },
         ScanError::Model(_) => internal(&detail),

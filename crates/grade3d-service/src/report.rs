@@ -15,11 +15,11 @@ use serde::{Deserialize, Serialize};
 use utoipa::ToSchema;
 
 use grade3d_core::body::derive::FeatureWarning;
-use grade3d_core::scan::ScanReport;
 use grade3d_core::mannequin::fit::Residual;
 use grade3d_core::mannequin::size_chart::{FigureType, Sex, SexSource};
 use grade3d_core::pattern::true_up::TrueReport;
 use grade3d_core::report::GarmentReport;
+use grade3d_core::scan::ScanReport;
 
 use crate::store::Entry;
 

@@ -35,8 +35,8 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 
 use crate::body::derive::{FeatureError, Landmarks};
-use crate::body::frame::FrameHints;
 use crate::body::feature::FeatureBody;
+use crate::body::frame::FrameHints;
 use crate::body::measure::{measure, MeasureOptions};
 use crate::collide::cache::{BodyKey, Obstacle, ObstacleCache};
 use crate::collide::render::{RenderError, RenderOptions, Renderer};
@@ -57,8 +57,8 @@ use crate::pipeline::{grade_with_plan, GradeOptions, Graded, PipelineError};
 use crate::report::{BodiesReport, BodyReport, Flow, MannequinReport, Report, SizeChartReport, SizeReport};
 use crate::store::Entry;
 use crate::template::format::Template;
-use grade3d_core::scan::{scan_body, ScanError, ScanOptions, ScanReport};
 use grade3d_core::report::{fit_report, FitReport, FitReportError, FitReportOptions, FitStep, GarmentReport};
+use grade3d_core::scan::{scan_body, ScanError, ScanOptions, ScanReport};
 
 /// Why a flow failed. Client-caused variants name the offending input.
 #[derive(Debug, thiserror::Error)]

@@ -663,8 +663,12 @@ fn refine(scan: &Scan<'_>, mesh: TriMesh, opts: &RegisterOptions) -> Result<TriM
             None => 0.0,
         });
         let d = llt.solve(rhs);
-        let moved: Vec<DVec3> =
-            mesh.positions().iter().enumerate().map(|(v, &p)| p + DVec3::new(d[(v, 0)], d[(v, 1)], d[(v, 2)])).collect();
+        let moved: Vec<DVec3> = mesh
+            .positions()
+            .iter()
+            .enumerate()
+            .map(|(v, &p)| p + DVec3::new(d[(v, 0)], d[(v, 1)], d[(v, 2)]))
+            .collect();
         mesh = TriMesh::new(moved, mesh.triangles().to_vec()).map_err(MannequinError::from)?;
     }
     Ok(mesh)
@@ -725,9 +729,7 @@ mod tests {
         let mesh = model.build(&MannequinParams::default()).expect("body");
         // a block of the body's size: no body shape fits it
         let aabb = mesh.aabb();
-        let block = TriMesh::icosahedron()
-            .map_positions(|p| aabb.centre() + p * aabb.size() * 0.3)
-            .expect("mesh");
+        let block = TriMesh::icosahedron().map_positions(|p| aabb.centre() + p * aabb.size() * 0.3).expect("mesh");
         match register(model, &block, &[], &RegisterOptions::default()) {
             Err(RegisterError::Residual { rms_mm, .. }) => assert!(rms_mm > 6.0),
             Err(RegisterError::TooFewPairs { .. }) => {}
