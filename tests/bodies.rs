@@ -414,12 +414,64 @@ fn armscye_section_through_the_torso_is_refused() {
     let u = lm.points[&PointId::UnderarmLeft];
     let inward = grade3d::geom::query::closest_point(&mesh, DVec3::new(0.3 * u.x, u.y - 0.02, u.z)).point;
     lm.points.insert(PointId::UnderarmLeft, inward);
-    let e = derive_features(mesh, &lm, &DeriveOptions::default()).unwrap_err();
+    // the point also lies 41 mm below its partner (refused by the pair check first): this test
+    // is the girth bound's, so the pair check is out of its way
+    let opts = DeriveOptions { max_pair_height_mm: 1000.0, ..DeriveOptions::default() };
+    let e = derive_features(mesh, &lm, &opts).unwrap_err();
     match e {
         FeatureError::ImplausibleGirth { curve, girth_mm, max_mm, ref reason, .. } => {
             assert_eq!(curve, CurveId::ArmscyeLeft, "{e}");
             assert!(girth_mm > max_mm && reason.contains("chest"), "{e}");
         }
         e => panic!("expected ImplausibleGirth, got {e}"),
+    }
+}
+
+/// Issue #17, item 3: supplied landmarks are checked as a pair and round the
+/// limb, and a refusal names the landmark at fault.
+#[test]
+fn swapped_uneven_and_off_line_landmarks_are_refused_by_name() {
+    let (_, mesh, lm) = fixture_bodies().swap_remove(0);
+    let opts = DeriveOptions::default();
+    // left and right swapped
+    let mut swapped = lm.clone();
+    let (l, r) = (lm.points[&PointId::HipLeft], lm.points[&PointId::HipRight]);
+    swapped.points.insert(PointId::HipLeft, r);
+    swapped.points.insert(PointId::HipRight, l);
+    match derive_features(mesh.clone(), &swapped, &opts).unwrap_err() {
+        FeatureError::SwappedSides { left, right, gap_mm } => {
+            assert_eq!((left, right), (PointId::HipLeft, PointId::HipRight));
+            assert!(gap_mm > 200.0, "{gap_mm}");
+        }
+        e => panic!("expected SwappedSides, got {e}"),
+    }
+    // a knee point 6 cm above its partner
+    let mut uneven = lm.clone();
+    let k = lm.points[&PointId::KneeRight];
+    uneven.points.insert(PointId::KneeRight, grade3d::geom::query::closest_point(&mesh, k + DVec3::Y * 0.06).point);
+    match derive_features(mesh.clone(), &uneven, &opts).unwrap_err() {
+        FeatureError::PairHeight { left, right, gap_mm, limit_mm } => {
+            assert_eq!((left, right), (PointId::KneeLeft, PointId::KneeRight));
+            assert!(gap_mm > limit_mm && gap_mm < 70.0, "{gap_mm}");
+        }
+        e => panic!("expected PairHeight, got {e}"),
+    }
+    // the user's case: the knee point at the front of the knee, not its side. It was refused as
+    // `curves ankle_left and leg_line_left do not cross near ankle_left_inner`; now by the knee
+    let mut front = lm.clone();
+    for (side, front_id) in [(PointId::KneeLeft, PointId::KneeLeftFront), (PointId::KneeRight, PointId::KneeRightFront)]
+    {
+        let p = front.points.get(&front_id).copied().unwrap_or_else(|| {
+            let s = lm.points[&side];
+            grade3d::geom::query::closest_point(&mesh, s + DVec3::new(-s.x.signum() * 0.05, 0.0, 0.08)).point
+        });
+        front.points.insert(side, p);
+    }
+    match derive_features(mesh, &front, &opts).unwrap_err() {
+        FeatureError::OffSideLine { point, side, angle_deg, limit_deg, .. } => {
+            assert_eq!((point, side), (PointId::KneeLeft, "outer side"));
+            assert!(angle_deg > limit_deg, "{angle_deg}");
+        }
+        e => panic!("expected OffSideLine naming the knee, got {e}"),
     }
 }

@@ -641,7 +641,17 @@ fn scan_flow_multipart() {
         call("POST", &s.url("/v1/grade/scan"), &[("Content-Type", &ct)], Some(&body))
     };
     post(&[("landmarks", None, &lm), ("template", None, b"trousers")]).problem(400, Some("scan"));
-    post(&[("scan", None, &glb), ("template", None, b"trousers")]).problem(400, Some("landmarks"));
+    post(&[
+        ("scan", None, &glb),
+        ("landmarks", None, &lm),
+        ("units", None, b"furlongs"),
+        ("template", None, b"trousers"),
+    ])
+    .problem(400, Some("units"));
+    post(&[("scan", None, &glb), ("landmarks", None, &lm), ("units", None, b"mm"), ("template", None, b"trousers")])
+        .problem(422, Some("units"));
+    post(&[("scan", None, &glb), ("landmarks", None, &lm), ("facing", None, b"+y"), ("template", None, b"trousers")])
+        .problem(422, Some("facing"));
     post(&[("scan", None, &glb), ("landmarks", None, &lm)]).problem(400, Some("template"));
     post(&[("scan", None, b"not a glb"), ("landmarks", None, &lm), ("template", None, b"trousers")])
         .problem(400, Some("scan"));
@@ -660,6 +670,69 @@ fn scan_flow_multipart() {
     assert!(raw.starts_with("HTTP/1.1 413"), "{raw}");
     assert!(raw.contains("application/problem+json") && raw.contains("body-too-large"), "{raw}");
     call("POST", &s.url("/v1/grade/scan"), &[json_ct()], Some(b"{}")).problem(415, None);
+}
+
+/// `glb` with triangle `face` of its first primitive made to repeat `vertex`
+/// (the indices `[vertex, vertex, c]`), as a re-meshing tool writes it.
+fn with_repeated_vertex(glb: &[u8], face: usize, vertex: u32) -> Vec<u8> {
+    let len = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
+    let json: serde_json::Value = serde_json::from_slice(&glb[20..20 + len]).unwrap();
+    let bin = 20 + len + 8;
+    let acc = &json["accessors"][json["meshes"][0]["primitives"][0]["indices"].as_u64().unwrap() as usize];
+    let view = &json["bufferViews"][acc["bufferView"].as_u64().unwrap() as usize];
+    let at = bin + view["byteOffset"].as_u64().unwrap_or(0) as usize + acc["byteOffset"].as_u64().unwrap_or(0) as usize;
+    let width = match acc["componentType"].as_u64().unwrap() {
+        5125 => 4,
+        5123 => 2,
+        _ => 1,
+    };
+    let mut out = glb.to_vec();
+    for k in 0..2 {
+        let i = at + (face * 3 + k) * width;
+        out[i..i + width].copy_from_slice(&vertex.to_le_bytes()[..width]);
+    }
+    out
+}
+
+/// Issue #17: a scan as it comes — without landmarks, with a triangle that
+/// repeats a vertex (the literal refusal a user met: `triangle 289 repeats
+/// vertex 149`) — is repaired, its landmarks found, and graded; the report
+/// says so.
+#[test]
+fn a_scan_without_landmarks_and_with_a_degenerate_triangle_is_graded() {
+    let s = Server::start(&temp_dir("scan-auto"), &[("GRADE3D_MAX_BODY_BYTES", "4000000")]);
+    let glb = with_repeated_vertex(&fixture("bodies/female-average-caucasian.glb"), 289, 149);
+    let (ct, body) = multipart(&[("scan", Some("body.glb"), &glb), ("template", None, b"straight-skirt")]);
+    let r = call("POST", &s.url("/v1/grade/scan"), &[("Content-Type", &ct)], Some(&body));
+    assert_eq!(r.status, 200, "{}", r.text());
+    let j = r.json();
+    let scan = &j["report"]["bodies"][0]["scan"];
+    assert_eq!(scan["repair"]["degenerate_dropped"], 1, "{scan}");
+    assert_eq!((scan["landmarks_supplied"].as_u64(), scan["landmarks_found"].as_u64()), (Some(0), Some(31)));
+    assert_eq!(
+        (&scan["frame"]["units"], &scan["frame"]["up"], &scan["frame"]["facing"]),
+        (&"m".into(), &"+y".into(), &"+z".into())
+    );
+    let reg = &scan["registration"];
+    assert!(reg["rms_mm"].as_f64().unwrap() < 1.0 && reg["p95_mm"].as_f64().unwrap() < 2.0, "{reg}");
+    assert_eq!(reg["confidence"].as_object().unwrap().len(), 31);
+    let garment = &j["report"]["bodies"][0]["garments"][0];
+    assert!(garment["fit"]["penetration"]["deepest_mm"].as_f64().unwrap() <= 1.0, "{garment}");
+    // stated hints are kept; the result differs from the detected one only in the report's flags
+    let (ct, body) = multipart(&[
+        ("scan", Some("body.glb"), &glb),
+        ("units", None, b"m"),
+        ("up", None, b"+y"),
+        ("facing", None, b"+z"),
+        ("template", None, b"straight-skirt"),
+    ]);
+    let stated = call("POST", &s.url("/v1/grade/scan"), &[("Content-Type", &ct)], Some(&body)).json();
+    let frame = &stated["report"]["bodies"][0]["scan"]["frame"];
+    assert_eq!(
+        (&frame["units_detected"], &frame["up_detected"], &frame["facing_detected"]),
+        (&false.into(), &false.into(), &false.into())
+    );
+    assert_ne!(stated["id"], j["id"], "stated hints are part of the input");
 }
 
 fn job_spec_bodies() -> String {

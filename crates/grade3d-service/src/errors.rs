@@ -153,7 +153,7 @@ fn scan_problem(e: &ScanError, detail: String) -> Problem {
                 FrameError::Mesh(_) => ("scan-invalid", "scan"),
                 FrameError::Axes { what: "up", .. } => ("scan-axes", "up"),
                 FrameError::Axes { .. } => ("scan-axes", "facing"),
-                FrameError::Units { .. } => ("scan-units", "units"),
+                FrameError::Units { .. } | FrameError::StatedUnits { .. } => ("scan-units", "units"),
                 FrameError::Facing { .. } => ("scan-facing", "facing"),
                 FrameError::Pose { .. } => ("scan-pose", "scan"),
             };
@@ -187,6 +187,9 @@ fn feature_slug(e: &FeatureError) -> &'static str {
         FeatureError::OffMidline { .. } => "body-landmark-off-midline",
         FeatureError::ImplausibleGirth { .. } => "body-implausible-girth",
         FeatureError::LandmarkHeight { .. } => "body-landmark-height",
+        FeatureError::SwappedSides { .. } => "body-swapped-sides",
+        FeatureError::PairHeight { .. } => "body-pair-height",
+        FeatureError::OffSideLine { .. } => "body-off-side-line",
     }
 }
 

@@ -133,6 +133,18 @@ pub struct DeriveOptions {
     /// [`Self::min_frame_triple`]) is used with a warning: Eq. (1) offsets
     /// along a nearly flat frame swing far for small changes. Default 0.2.
     pub warn_frame_triple: f64,
+    /// Largest height difference of a left/right landmark pair, mm.
+    /// Default 40 (shoulders differ by up to about 2 cm on a real body; a
+    /// point placed at the wrong girth is 5 cm and more off).
+    pub max_pair_height_mm: f64,
+    /// How far a left point may lie to the right of its partner before the
+    /// pair counts as swapped, mm. Default 10 (the inner points of thighs
+    /// that touch meet at the centre line).
+    pub max_pair_cross_mm: f64,
+    /// Largest angle about the limb's centre (its horizontal section's
+    /// centroid) between a leg's side, inner, front or back point and where
+    /// it belongs, degrees. Default 45 (half way to the next line).
+    pub max_side_angle_deg: f64,
     /// The thigh contact test ([`super::contact`]).
     pub contact: ContactOptions,
 }
@@ -157,6 +169,9 @@ impl Default for DeriveOptions {
             warn_midline_offset_mm: 15.0,
             warn_landmark_offset_mm: 10.0,
             warn_frame_triple: 0.2,
+            max_pair_height_mm: 40.0,
+            max_pair_cross_mm: 10.0,
+            max_side_angle_deg: 45.0,
             contact: ContactOptions::default(),
         }
     }
@@ -288,6 +303,53 @@ pub enum FeatureError {
         /// The rule.
         reason: &'static str,
     },
+    /// A left landmark lies on the body's right of its right partner
+    /// (the body faces +Z, its left is +X): the pair is swapped.
+    #[error(
+        "landmark `{left}` lies {gap_mm:.0} mm to the right of `{right}`; the body's left is +X (it faces +Z): \
+         are left and right swapped?"
+    )]
+    SwappedSides {
+        /// The left landmark.
+        left: PointId,
+        /// Its right partner.
+        right: PointId,
+        /// How far it lies on the wrong side, mm.
+        gap_mm: f64,
+    },
+    /// A left/right pair is not mirror-consistent: the two lie at heights
+    /// that differ more than a body's left and right do.
+    #[error(
+        "landmarks `{left}` and `{right}` lie {gap_mm:.0} mm apart in height; a pair may differ by up to {limit_mm} mm"
+    )]
+    PairHeight {
+        /// The left landmark.
+        left: PointId,
+        /// Its right partner.
+        right: PointId,
+        /// Their height difference, mm.
+        gap_mm: f64,
+        /// The limit, mm.
+        limit_mm: f64,
+    },
+    /// A limb's side point is not on its side of the limb (a knee point at
+    /// the front of the knee where the knee girth's side point is meant).
+    #[error(
+        "landmark `{point}` lies {angle_deg:.0}° round the {limb} from its {side} (allowed up to {limit_deg}°); \
+         it is the girth's point on the {side}"
+    )]
+    OffSideLine {
+        /// The landmark.
+        point: PointId,
+        /// The limb: `leg` or `arm`.
+        limb: &'static str,
+        /// Where it belongs: `outer side`, `inner side`, `front` or `back`.
+        side: &'static str,
+        /// Its angle from there about the limb's centre, degrees.
+        angle_deg: f64,
+        /// The limit, degrees.
+        limit_deg: f64,
+    },
     /// The frame at a point is (nearly) degenerate.
     #[error("degenerate frame at `{point}`: |t(f1)·(t(f2)×n)| = {triple:.3} < {min}")]
     DegenerateFrame {
@@ -361,6 +423,8 @@ pub fn derive_features(
     }
     check_midline(&snapped, opts, &mut warnings)?;
     check_heights(&snapped)?;
+    check_pairs(&snapped, opts)?;
+    check_limb_sides(&mesh, &snapped, opts)?;
 
     let mut curves = BTreeMap::new();
     for def in vocab::CURVES {
@@ -536,6 +600,99 @@ const BELOW: [(PointId, PointId, &str); 16] = {
         (P::UnderarmRight, P::ShoulderRight, TORSO),
     ]
 };
+
+/// Every left/right pair of the vocabulary (`*_left*` and its `*_right*`).
+fn left_right_pairs() -> impl Iterator<Item = (PointId, PointId)> {
+    PointId::ALL.iter().filter_map(|&l| {
+        let name = l.as_str();
+        name.contains("_left").then(|| name.replacen("_left", "_right", 1).parse::<PointId>().ok().map(|r| (l, r)))?
+    })
+}
+
+/// Mirror consistency of the left/right pairs given (issue #17, item 3):
+/// the left point on the body's left (+X; it faces +Z) of its partner
+/// ([`FeatureError::SwappedSides`]), and the two at about one height
+/// ([`FeatureError::PairHeight`]).
+fn check_pairs(snapped: &BTreeMap<PointId, DVec3>, opts: &DeriveOptions) -> Result<(), FeatureError> {
+    for (left, right) in left_right_pairs() {
+        let (Some(l), Some(r)) = (snapped.get(&left), snapped.get(&right)) else { continue };
+        let cross_mm = (r.x - l.x) * MM_PER_M;
+        if cross_mm > opts.max_pair_cross_mm {
+            return Err(FeatureError::SwappedSides { left, right, gap_mm: cross_mm });
+        }
+        let gap_mm = (l.y - r.y).abs() * MM_PER_M;
+        if gap_mm > opts.max_pair_height_mm {
+            return Err(FeatureError::PairHeight { left, right, gap_mm, limit_mm: opts.max_pair_height_mm });
+        }
+    }
+    Ok(())
+}
+
+/// Where each of a leg's girth points belongs round the leg: its side,
+/// with the horizontal direction from the leg's centre (left leg; the
+/// right leg's mirror).
+const LEG_POINTS: [(PointId, PointId, &str, DVec3); 12] = {
+    use PointId as P;
+    const OUT: DVec3 = DVec3::X;
+    const IN: DVec3 = DVec3::NEG_X;
+    const FRONT: DVec3 = DVec3::Z;
+    const BACK: DVec3 = DVec3::NEG_Z;
+    [
+        (P::ThighLeft, P::ThighRight, "outer side", OUT),
+        (P::KneeLeft, P::KneeRight, "outer side", OUT),
+        (P::AnkleLeft, P::AnkleRight, "outer side", OUT),
+        (P::ThighLeftInner, P::ThighRightInner, "inner side", IN),
+        (P::KneeLeftInner, P::KneeRightInner, "inner side", IN),
+        (P::AnkleLeftInner, P::AnkleRightInner, "inner side", IN),
+        (P::ThighLeftFront, P::ThighRightFront, "front", FRONT),
+        (P::KneeLeftFront, P::KneeRightFront, "front", FRONT),
+        (P::AnkleLeftFront, P::AnkleRightFront, "front", FRONT),
+        (P::ThighLeftBack, P::ThighRightBack, "back", BACK),
+        (P::KneeLeftBack, P::KneeRightBack, "back", BACK),
+        (P::AnkleLeftBack, P::AnkleRightBack, "back", BACK),
+    ]
+};
+
+/// A leg's girth points on their lines (issue #17, item 3: a knee point at
+/// the front of the knee, where the side point is meant, made every curve
+/// through the leg miss its neighbours, and the refusal named the ankle):
+/// the angle about the centroid of the leg's horizontal section through
+/// the point, between the point and where it belongs, at most
+/// [`DeriveOptions::max_side_angle_deg`] ([`FeatureError::OffSideLine`]).
+fn check_limb_sides(
+    mesh: &TriMesh,
+    snapped: &BTreeMap<PointId, DVec3>,
+    opts: &DeriveOptions,
+) -> Result<(), FeatureError> {
+    for (left, right, side, dir) in LEG_POINTS {
+        for (point, want) in [(left, dir), (right, DVec3::new(-dir.x, dir.y, dir.z))] {
+            let Some(&p) = snapped.get(&point) else { continue };
+            let sections = slice(mesh, &Plane { normal: DVec3::Y, offset: p.y });
+            let Some(leg) = sections.iter().map(|s| &s.polyline).filter(|l| l.closed).min_by(|a, b| {
+                let d = |l: &Polyline| l.closest(p).map_or(f64::INFINITY, |c| c.distance);
+                d(a).total_cmp(&d(b))
+            }) else {
+                continue;
+            };
+            let out = leg.length_centroid();
+            let to = DVec3::new(p.x - out.x, 0.0, p.z - out.z);
+            if to.length() == 0.0 {
+                continue;
+            }
+            let angle_deg = to.angle_between(want).to_degrees();
+            if angle_deg > opts.max_side_angle_deg {
+                return Err(FeatureError::OffSideLine {
+                    point,
+                    limb: "leg",
+                    side,
+                    angle_deg,
+                    limit_deg: opts.max_side_angle_deg,
+                });
+            }
+        }
+    }
+    Ok(())
+}
 
 /// Plausibility of the landmarks' heights ([`BELOW`]): a girth off its
 /// landmark's height is refused, naming both landmarks and the gap

@@ -265,6 +265,18 @@ pub enum FrameError {
         /// Largest, m.
         max_m: f64,
     },
+    /// The stated units make the height no stature.
+    #[error("with `units` {units:?} the body is {stature_m:.3} m tall: not a stature of {min_m}–{max_m} m")]
+    StatedUnits {
+        /// The units stated.
+        units: Units,
+        /// The stature they give, m.
+        stature_m: f64,
+        /// Smallest stature, m.
+        min_m: f64,
+        /// Largest, m.
+        max_m: f64,
+    },
     /// The facing direction could not be told.
     #[error(
         "cannot tell which way the body faces: its feet reach {offset_mm:.0} mm ahead of the ankles either way \
@@ -329,6 +341,14 @@ pub fn body_frame(
     let height = size.dot(up.vector());
     let stature_ok = |u: Units| (opts.min_stature_m..=opts.max_stature_m).contains(&(height * u.metres()));
     let units = match hints.units {
+        Some(u) if !stature_ok(u) => {
+            return Err(FrameError::StatedUnits {
+                units: u,
+                stature_m: height * u.metres(),
+                min_m: opts.min_stature_m,
+                max_m: opts.max_stature_m,
+            })
+        }
         Some(u) => u,
         None => Units::ALL.into_iter().find(|&u| stature_ok(u)).ok_or(FrameError::Units {
             height,
@@ -468,6 +488,8 @@ mod tests {
             body_frame(&body, &bad, &FrameOptions::default()),
             Err(FrameError::Axes { what: "facing", .. })
         ));
+        let stated = FrameHints { units: Some(Units::Millimetres), ..FrameHints::default() };
+        assert!(matches!(body_frame(&body, &stated, &FrameOptions::default()), Err(FrameError::StatedUnits { .. })));
         let tiny = hm08().map_positions(|p| p * 0.01).expect("mesh");
         assert!(matches!(
             body_frame(&tiny, &FrameHints::default(), &FrameOptions::default()),
