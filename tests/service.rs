@@ -487,6 +487,12 @@ fn answers_validate_against_the_generated_schemas() {
     assert_eq!(r.status, 200, "{}", r.text());
     validate("GradeResult", &r.json());
     validate("BodiesReport", &r.json()["report"]);
+    // without landmarks: the report carries the registration (issue #17)
+    let (ct, body) = multipart(&[("scan", Some("b.glb"), &glb), ("template", None, b"straight-skirt")]);
+    let r = call("POST", &s.url("/v1/grade/scan"), &[("Content-Type", &ct)], Some(&body));
+    assert_eq!(r.status, 200, "{}", r.text());
+    assert!(r.json()["report"]["bodies"][0]["scan"]["registration"].is_object());
+    validate("BodiesReport", &r.json()["report"]);
     let job = format!(r#"{{"templates":["straight-skirt"],"size_chart":{CHART}}}"#);
     let r = call("POST", &s.url("/v1/jobs"), &[json_ct()], Some(job.as_bytes()));
     assert_eq!(r.status, 202, "{}", r.text());
@@ -733,6 +739,19 @@ fn a_scan_without_landmarks_and_with_a_degenerate_triangle_is_graded() {
         (&false.into(), &false.into(), &false.into())
     );
     assert_ne!(stated["id"], j["id"], "stated hints are part of the input");
+    // a batch job's body without landmarks, its units stated
+    let enc = base64::engine::general_purpose::STANDARD.encode(&glb);
+    let spec = serde_json::json!({
+        "templates": ["straight-skirt"],
+        "bodies": [{"name": "auto", "glb_base64": enc, "units": "m"}],
+    })
+    .to_string();
+    let r = call("POST", &s.url("/v1/jobs"), &[json_ct()], Some(spec.as_bytes()));
+    assert_eq!(r.status, 202, "{}", r.text());
+    let done = wait_job(&s, r.header("location").unwrap());
+    assert_eq!(done["progress"]["stage"], "done", "{done}");
+    let body = &done["report"]["bodies"][0];
+    assert_eq!((&body["scan"]["landmarks_found"], &body["scan"]["frame"]["units_detected"]), (&31.into(), &false.into()));
 }
 
 fn job_spec_bodies() -> String {
