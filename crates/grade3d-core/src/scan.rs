@@ -20,13 +20,15 @@
 //!
 //! [`ScanError`]: one variant per step, each carrying the step's own error.
 
+use std::collections::BTreeMap;
+
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use crate::body::derive::{derive_features, DeriveOptions, FeatureError, Landmarks};
 use crate::body::feature::FeatureBody;
 use crate::body::frame::{body_frame, FrameError, FrameHints, FrameOptions, FrameReport};
-use crate::body::vocab::required_landmarks;
+use crate::body::vocab::{required_landmarks, PointId};
 use crate::geom::polyline::Polyline;
 use crate::geom::repair::{repair, RepairError, RepairOptions, RepairReport};
 use crate::mannequin::model::{BodyModel, MannequinError};
@@ -59,6 +61,11 @@ pub struct ScanReport {
     pub landmarks_found: usize,
     /// The registration, where one ran.
     pub registration: Option<RegistrationReport>,
+    /// Every landmark used (supplied or found), on the scan, in the scan's
+    /// own axes and in metres: a landmarks document's `points` as they
+    /// were read, so that one can be corrected and the scan sent again.
+    #[schema(value_type = BTreeMap<String, [f64; 3]>)]
+    pub landmarks: BTreeMap<PointId, [f64; 3]>,
 }
 
 /// Why a scan could not be made into a feature body.
@@ -121,7 +128,16 @@ pub fn scan_body(
         (Some(reg.report), found)
     };
     let body = derive_features(mesh, &landmarks, &opts.derive)?;
-    let report = ScanReport { repair: repaired, frame: framed, landmarks_supplied, landmarks_found, registration };
+    let back = frame.rotation.transpose();
+    let used = landmarks.points.iter().map(|(&id, &p)| (id, (back * p).to_array())).collect();
+    let report = ScanReport {
+        repair: repaired,
+        frame: framed,
+        landmarks_supplied,
+        landmarks_found,
+        registration,
+        landmarks: used,
+    };
     Ok((body, report))
 }
 
@@ -129,7 +145,6 @@ pub fn scan_body(
 mod tests {
     use super::*;
     use crate::body::frame::{Axis, Units};
-    use crate::body::vocab::PointId;
     use crate::mannequin::landmarks::{hm08_landmarks, Hm08LandmarkOptions};
     use crate::mannequin::model::MannequinParams;
     use glam::DMat3;
@@ -181,5 +196,8 @@ mod tests {
         let reg = r.registration.expect("registered");
         assert!(reg.rms_mm < 1.5, "{reg:?}");
         assert!(body.points[&PointId::Crotch].position.distance(crotch) < 0.01);
+        // the landmarks used, in the scan's axes: the supplied one as it was given
+        assert_eq!(r.landmarks.len(), truth.points.len());
+        assert!(DVec3::from_array(r.landmarks[&PointId::Crotch]).distance(z_up * crotch) < 1e-12);
     }
 }
