@@ -1,17 +1,23 @@
 //! Feature human model benchmarks (issue #2): build a mannequin from
 //! parameters, fit one size-chart row, derive features for a 60k-triangle
-//! scan. Run: `cargo bench --bench bodies`.
+//! scan; issue #17: repair and frame a scan as it comes, and register the
+//! body model to a 60k-triangle scan (its bar: ≤ 300 ms on two cores).
+//! Run: `cargo bench --bench bodies`.
 #![expect(missing_docs, reason = "criterion_group! generates undocumented items")]
 
 use std::path::Path;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use grade3d::body::derive::{derive_features, DeriveOptions};
+use grade3d::body::frame::{body_frame, FrameHints, FrameOptions};
+use grade3d::geom::repair::{repair, RepairOptions};
 use grade3d::geom::simplify::{remesh_unrelated, SimplifyOptions};
 use grade3d::io::gltf::read_mesh;
 use grade3d::io::landmarks::parse_landmarks;
 use grade3d::mannequin::fit::{fit_size, FitOptions};
 use grade3d::mannequin::model::{BodyModel, MannequinParams};
+use grade3d::mannequin::population::{sample_population, scan_like};
+use grade3d::mannequin::register::{register, RegisterOptions};
 use grade3d::mannequin::size_chart::{parse_csv, SizeChartOptions};
 
 fn benches(c: &mut Criterion) {
@@ -47,6 +53,23 @@ fn benches(c: &mut Criterion) {
     });
     g.bench_function("scan_60k", |b| {
         b.iter(|| derive_features(scan.clone(), &lm, &DeriveOptions::default()).expect("derive"))
+    });
+    g.finish();
+
+    // issue #17: a scan-like population body (re-meshed to 60k triangles, 1 mm noise)
+    let body = &sample_population(40, 13)[1];
+    let like = scan_like(&model.build(&body.params).expect("body"), 60_000, 1e-3, 13).expect("scan");
+    let soup: Vec<[u64; 3]> = like.triangles().iter().map(|t| t.map(|v| u64::from(v.0))).collect();
+    let mut g = c.benchmark_group("scan_as_it_comes");
+    g.sample_size(10);
+    g.bench_function("repair_and_frame_60k", |b| {
+        b.iter(|| {
+            let (mesh, _) = repair(like.positions(), &soup, &RepairOptions::default()).expect("repair");
+            body_frame(&mesh, &FrameHints::default(), &FrameOptions::default()).expect("frame")
+        })
+    });
+    g.bench_function("register_60k", |b| {
+        b.iter(|| register(model, &like, &[], &RegisterOptions::default()).expect("register"))
     });
     g.finish();
 }

@@ -5,7 +5,7 @@
 //! distance between the two surfaces (two parameter sets that give the same
 //! surface place MakeHuman's rings differently).
 //!
-//! `cargo run --release --example register_probe -- [BODIES] [SAMPLES] [ROUNDS]`
+//! `cargo run --release --example register_probe -- [BODIES] [SAMPLES] [ROUNDS] [LM_STEPS]`
 
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -19,11 +19,13 @@ use grade3d::mannequin::register::{register, RegisterOptions};
 
 fn main() {
     let arg = |i: usize, d: usize| std::env::args().nth(i).and_then(|a| a.parse().ok()).unwrap_or(d);
-    let (bodies, samples, rounds) = (arg(1, 10), arg(2, 1500), arg(3, 12));
-    let opts = RegisterOptions { samples, rounds, ..RegisterOptions::default() };
+    let d = RegisterOptions::default();
+    let (bodies, samples, rounds, lm_steps) = (arg(1, 10), arg(2, d.samples), arg(3, d.rounds), arg(4, d.lm_steps));
+    let opts = RegisterOptions { samples, rounds, lm_steps, ..d };
     let model = BodyModel::embedded().unwrap();
     let mut err: BTreeMap<PointId, Vec<f64>> = BTreeMap::new();
     let mut shape_err: BTreeMap<PointId, Vec<f64>> = BTreeMap::new();
+    let mut times = Vec::new();
     for (i, b) in sample_population(40, 13).into_iter().take(bodies).enumerate() {
         let mesh = model.build(&b.params).unwrap();
         let truth = hm08_landmarks(model, &mesh, &Default::default()).unwrap().points;
@@ -31,6 +33,7 @@ fn main() {
         let t = Instant::now();
         let reg = register(model, &scan, &[], &opts).unwrap();
         let ms = t.elapsed().as_secs_f64() * 1e3;
+        times.push(ms);
         // the fitted parameters' own model against the true one
         let fitted = model.build(&reg.params).unwrap();
         let tree = WindingTree::new(&mesh, &WindingOptions::default());
@@ -55,6 +58,14 @@ fn main() {
         v.sort_by(f64::total_cmp);
         v[((v.len() - 1) as f64 * f).round() as usize]
     };
+    let mut all: Vec<f64> = err.values().flatten().copied().collect();
+    println!(
+        "registration {:.0} ms median, {:.0} ms max; all landmarks: median {:.1} mm, p95 {:.1} mm",
+        q(&mut times, 0.5),
+        q(&mut times, 1.0),
+        q(&mut all, 0.5),
+        q(&mut all, 0.95)
+    );
     println!("{:18} {:>8} {:>8}   {:>14}", "landmark", "median", "p95", "fitted model median");
     for (id, v) in &mut err {
         let s = shape_err.get_mut(id).unwrap();

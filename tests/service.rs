@@ -751,7 +751,10 @@ fn a_scan_without_landmarks_and_with_a_degenerate_triangle_is_graded() {
     let done = wait_job(&s, r.header("location").unwrap());
     assert_eq!(done["progress"]["stage"], "done", "{done}");
     let body = &done["report"]["bodies"][0];
-    assert_eq!((&body["scan"]["landmarks_found"], &body["scan"]["frame"]["units_detected"]), (&31.into(), &false.into()));
+    assert_eq!(
+        (&body["scan"]["landmarks_found"], &body["scan"]["frame"]["units_detected"]),
+        (&31.into(), &false.into())
+    );
 }
 
 fn job_spec_bodies() -> String {

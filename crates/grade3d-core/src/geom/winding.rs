@@ -384,11 +384,29 @@ impl WindingTree {
         (q, (b - a).cross(c - a).normalize_or_zero(), d)
     }
 
+    /// [`WindingTree::closest_point`] where a surface point at most `bound`
+    /// from `p` is known (the last answer for a point that has moved a
+    /// little: ICP's pairs round after round): only the parts of the tree
+    /// nearer than `bound` are searched, and the answer is the same.
+    /// `None` if the surface is farther than `bound`.
+    pub fn closest_point_within(&self, p: DVec3, bound: f64) -> Option<(DVec3, FaceId, f64)> {
+        let (q, i, d) = self.closest_index_within(p, bound * bound);
+        (i != usize::MAX).then(|| (q, self.faces[i], d))
+    }
+
     /// Closest point, its triangle's index in tree order, and the distance.
     fn closest_index(&self, p: DVec3) -> (DVec3, usize, f64) {
+        self.closest_index_within(p, f64::INFINITY)
+    }
+
+    /// [`Self::closest_index`] searching only up to `√bound_d2`; the index
+    /// is `usize::MAX` when nothing is that near.
+    fn closest_index_within(&self, p: DVec3, bound_d2: f64) -> (DVec3, usize, f64) {
         let mut best_point = self.positions[self.triangles[0][0] as usize];
-        let mut best_index = 0usize;
-        let mut best_d2 = f64::INFINITY;
+        let mut best_index = if bound_d2.is_finite() { usize::MAX } else { 0 };
+        // strictly nearer than the bound, or the bound itself: a point at exactly `bound` counts
+        let mut best_d2 =
+            if bound_d2.is_finite() { bound_d2 * (1.0 + 1e-12) + f64::MIN_POSITIVE } else { f64::INFINITY };
         let mut stack = [(0u32, 0.0f64); STACK];
         let mut top = 1;
         while top > 0 {
@@ -831,6 +849,23 @@ mod tests {
         assert!(max_diff < 1e-2, "{max_diff}");
         assert!(max_diff3 < 1e-3, "{max_diff3}");
         assert!(max_depth_err <= sag + 1e-12, "{max_depth_err} > {sag}");
+    }
+
+    #[test]
+    fn a_bounded_closest_point_query_gives_the_same_answer() {
+        let m = icosphere(3, 0.4).map_positions(|p| p + DVec3::new(0.1, -0.2, 0.3)).unwrap();
+        let tree = WindingTree::new(&m, &WindingOptions::default());
+        let mut rng = Rng(5);
+        for _ in 0..500 {
+            let p = rng.in_box(DVec3::splat(-1.0), DVec3::splat(1.0));
+            let (q, f, d) = tree.closest_point(p);
+            for bound in [d, 1.5 * d + 1e-3] {
+                assert_eq!(tree.closest_point_within(p, bound), Some((q, f, d)), "{p} within {bound}");
+            }
+            if d > 1e-6 {
+                assert_eq!(tree.closest_point_within(p, 0.5 * d), None);
+            }
+        }
     }
 
     #[test]
