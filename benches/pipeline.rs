@@ -91,7 +91,7 @@ fn benches(c: &mut Criterion) {
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/bodies");
         let glb = std::fs::read(root.join("female-average-caucasian.glb")).expect("fixture");
         let lm = std::fs::read_to_string(root.join("female-average-caucasian.landmarks.json")).expect("fixture");
-        let input = BodyInput { name: "scan", glb: &glb, landmarks: &lm };
+        let input = BodyInput { name: "scan", glb: &glb, landmarks: Some(&lm), hints: Default::default() };
         let once = work::scan(&ctx, std::slice::from_ref(&t), &input).expect("scan flow");
         eprintln!("scan flow stage timings (ms): {:?}", once.timings);
         g.bench_function("scan_flow_request", |b| {

@@ -46,7 +46,7 @@ use glam::DVec3;
 use rustc_hash::FxHashMap;
 use serde::{Deserialize, Serialize};
 
-use super::mesh::{boundary_loops, MeshError, TriMesh, VertexId};
+use super::mesh::{MeshError, TriMesh, VertexId};
 
 /// Knobs of [`repair`]. Every length is a share of the input's longest
 /// bounding-box side (the stature of a standing body), because the units
@@ -226,11 +226,13 @@ pub fn repair(
         return Err(RepairError::NothingLeft { triangles: triangles.len() });
     }
     // 5. orientation
-    report.triangles_reoriented = orient(&welded, &mut tris, &comp);
+    let (flipped, boundary) = orient(&welded, &mut tris, &comp);
+    report.triangles_reoriented = flipped;
     // 6. holes
-    let (mut pos, mut tris) = compact(&welded, tris);
+    let (mut pos, mut tris, map) = compact(&welded, tris);
     let limit = opts.max_hole_share * side;
-    for lp in boundary_loops(&tris) {
+    let boundary = boundary.into_iter().map(|(a, b)| (map[a as usize], map[b as usize])).collect();
+    for lp in loops_of(boundary) {
         let ring: Vec<DVec3> = lp.iter().map(|&v| pos[v as usize]).collect();
         let (lo, hi) = ring.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
         if lp.len() < 3 || lo.distance(hi) > limit {
@@ -256,22 +258,30 @@ pub fn repair(
 
 /// Welds positions within `tolerance` (grid hashing, first come first
 /// served); returns the kept positions and each input vertex's new index.
+/// Cells are [`WELD_CELLS`] tolerances wide, so a point is near a cell face
+/// (and its neighbour across it must be searched) only on the axes where it
+/// lies within a tolerance of one: usually its own cell alone is searched.
 fn weld_positions(positions: &[DVec3], tolerance: f64) -> (Vec<DVec3>, Vec<u32>) {
-    let cell = tolerance.max(f64::MIN_POSITIVE);
-    let key = |p: DVec3| -> [i64; 3] {
-        let q = (p / cell).floor();
-        [q.x as i64, q.y as i64, q.z as i64]
-    };
+    let cell = (WELD_CELLS * tolerance).max(f64::MIN_POSITIVE);
     // only looked up, never iterated: the hasher cannot change the result
     let mut grid: FxHashMap<[i64; 3], Vec<u32>> = FxHashMap::default();
+    grid.reserve(positions.len());
     let mut out: Vec<DVec3> = Vec::with_capacity(positions.len());
     let mut remap = Vec::with_capacity(positions.len());
     for &p in positions {
-        let k = key(p);
+        let q = p / cell;
+        let base = q.floor();
+        let k = [base.x as i64, base.y as i64, base.z as i64];
+        // per axis, the neighbouring cells within a tolerance: −1, +1 or none
+        let near = |f: f64| -> [i64; 2] {
+            let frac = f - f.floor();
+            [if frac * WELD_CELLS <= 1.0 { -1 } else { 0 }, if (1.0 - frac) * WELD_CELLS <= 1.0 { 1 } else { 0 }]
+        };
+        let [nx, ny, nz] = [near(q.x), near(q.y), near(q.z)];
         let mut found = None;
-        'search: for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
+        'search: for dx in nx[0]..=nx[1] {
+            for dy in ny[0]..=ny[1] {
+                for dz in nz[0]..=nz[1] {
                     if let Some(list) = grid.get(&[k[0] + dx, k[1] + dy, k[2] + dz]) {
                         if let Some(&j) = list.iter().find(|&&j| out[j as usize].distance(p) <= tolerance) {
                             found = Some(j);
@@ -290,6 +300,9 @@ fn weld_positions(positions: &[DVec3], tolerance: f64) -> (Vec<DVec3>, Vec<u32>)
     }
     (out, remap)
 }
+
+/// Width of a weld cell, in weld tolerances (see [`weld_positions`]).
+const WELD_CELLS: f64 = 4.0;
 
 /// Union–find root with path halving.
 fn root(parent: &mut [u32], mut v: u32) -> u32 {
@@ -323,17 +336,46 @@ fn components(vertices: usize, tris: &[[u32; 3]]) -> Vec<u32> {
         .collect()
 }
 
-/// Makes each component's faces agree across manifold edges and face out
-/// (module docs, step 5); returns how many faces it flipped.
-fn orient(pos: &[DVec3], tris: &mut [[u32; 3]], comp: &[u32]) -> usize {
-    // undirected edge -> faces
-    let mut edges: FxHashMap<(u32, u32), Vec<u32>> = FxHashMap::default();
+/// Each face's neighbour across its edge `k` (from corner `k` to `k + 1`)
+/// where that edge is manifold (exactly two faces), `u32::MAX` elsewhere;
+/// and the boundary edges (one face) as `(face, k)`.
+fn adjacency(tris: &[[u32; 3]]) -> (Vec<[u32; 3]>, Vec<(u32, u8)>) {
+    // (undirected edge, face, k) sorted: each edge's uses a run
+    let mut uses: Vec<((u32, u32), u32, u8)> = Vec::with_capacity(3 * tris.len());
     for (f, t) in tris.iter().enumerate() {
         for k in 0..3 {
             let (a, b) = (t[k], t[(k + 1) % 3]);
-            edges.entry((a.min(b), a.max(b))).or_default().push(f as u32);
+            uses.push(((a.min(b), a.max(b)), f as u32, k as u8));
         }
     }
+    uses.sort_unstable();
+    let mut next = vec![[u32::MAX; 3]; tris.len()];
+    let mut boundary = Vec::new();
+    let mut i = 0;
+    while i < uses.len() {
+        let mut j = i + 1;
+        while j < uses.len() && uses[j].0 == uses[i].0 {
+            j += 1;
+        }
+        match j - i {
+            1 => boundary.push((uses[i].1, uses[i].2)),
+            2 => {
+                let ((_, f, k), (_, g, l)) = (uses[i], uses[i + 1]);
+                next[f as usize][k as usize] = g;
+                next[g as usize][l as usize] = f;
+            }
+            _ => {}
+        }
+        i = j;
+    }
+    (next, boundary)
+}
+
+/// Makes each component's faces agree across manifold edges and face out
+/// (module docs, step 5); returns how many faces it flipped, and the
+/// boundary edges as directed half-edges of the faces as they now run.
+fn orient(pos: &[DVec3], tris: &mut [[u32; 3]], comp: &[u32]) -> (usize, Vec<(u32, u32)>) {
+    let (next, boundary) = adjacency(tris);
     let runs = |t: &[u32; 3], a: u32, b: u32| (0..3).any(|k| t[k] == a && t[(k + 1) % 3] == b);
     let mut flipped = vec![false; tris.len()];
     let mut visited = vec![false; tris.len()];
@@ -346,16 +388,15 @@ fn orient(pos: &[DVec3], tris: &mut [[u32; 3]], comp: &[u32]) -> usize {
         queue.push_back(seed);
         while let Some(f) = queue.pop_front() {
             let t = tris[f];
-            for k in 0..3 {
+            // `next` is indexed by the edges as the faces were read; a flip swaps corners 1 and
+            // 2, which keeps edge {t0, t1}'s neighbour under k = 0 only for unflipped faces
+            let edges: [u32; 3] = if flipped[f] { [next[f][2], next[f][1], next[f][0]] } else { next[f] };
+            for (k, &g) in edges.iter().enumerate() {
+                let g = g as usize;
+                if g == u32::MAX as usize || visited[g] {
+                    continue;
+                }
                 let (a, b) = (t[k], t[(k + 1) % 3]);
-                let Some(adj) = edges.get(&(a.min(b), a.max(b))) else { continue };
-                if adj.len() != 2 {
-                    continue;
-                }
-                let g = if adj[0] as usize == f { adj[1] } else { adj[0] } as usize;
-                if visited[g] {
-                    continue;
-                }
                 visited[g] = true;
                 if runs(&tris[g], a, b) {
                     tris[g].swap(1, 2);
@@ -387,11 +428,49 @@ fn orient(pos: &[DVec3], tris: &mut [[u32; 3]], comp: &[u32]) -> usize {
             flipped[f] = !flipped[f];
         }
     }
-    flipped.iter().filter(|&&x| x).count()
+    // the boundary edges, each run as its face now runs it
+    let half_edges = boundary
+        .into_iter()
+        .map(|(f, k)| {
+            let t = tris[f as usize];
+            let k = if flipped[f as usize] { [2, 1, 0][k as usize] } else { k as usize };
+            (t[k], t[(k + 1) % 3])
+        })
+        .collect();
+    (flipped.iter().filter(|&&x| x).count(), half_edges)
 }
 
-/// Drops unused vertices, keeping the others in their order.
-fn compact(pos: &[DVec3], tris: Vec<[u32; 3]>) -> (Vec<DVec3>, Vec<[u32; 3]>) {
+/// The boundary half-edges chained into loops, each run along its faces'
+/// orientation (as [`super::mesh::boundary_loops`], from the half-edges alone).
+fn loops_of(mut half_edges: Vec<(u32, u32)>) -> Vec<Vec<u32>> {
+    half_edges.sort_unstable();
+    let mut used = vec![false; half_edges.len()];
+    let mut loops = Vec::new();
+    for s in 0..half_edges.len() {
+        if used[s] {
+            continue;
+        }
+        used[s] = true;
+        let (start, mut at) = half_edges[s];
+        let mut lp = vec![start];
+        while at != start {
+            lp.push(at);
+            // an unused half-edge leaving `at`
+            let from = half_edges.partition_point(|e| e.0 < at);
+            let Some(i) = (from..half_edges.len()).take_while(|&i| half_edges[i].0 == at).find(|&i| !used[i]) else {
+                break;
+            };
+            used[i] = true;
+            at = half_edges[i].1;
+        }
+        loops.push(lp);
+    }
+    loops
+}
+
+/// Drops unused vertices, keeping the others in their order; and the old
+/// index → new index map.
+fn compact(pos: &[DVec3], tris: Vec<[u32; 3]>) -> (Vec<DVec3>, Vec<[u32; 3]>, Vec<u32>) {
     let mut used = vec![false; pos.len()];
     for t in &tris {
         for &v in t {
@@ -407,12 +486,13 @@ fn compact(pos: &[DVec3], tris: Vec<[u32; 3]>) -> (Vec<DVec3>, Vec<[u32; 3]>) {
         }
     }
     let tris = tris.into_iter().map(|t| t.map(|v| map[v as usize])).collect();
-    (out, tris)
+    (out, tris, map)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geom::mesh::boundary_loops;
     use crate::geom::winding::{WindingOptions, WindingTree};
 
     fn raw(mesh: &TriMesh) -> (Vec<DVec3>, Vec<[u64; 3]>) {
