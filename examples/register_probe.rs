@@ -50,8 +50,8 @@ fn main() {
             }
         }
         println!(
-            "{:26} {ms:6.0} ms  rms {:.2} mm  fitted model vs true model {rms:.2} mm RMS (after its own translation)  worst {} {:.1} mm",
-            b.name, reg.report.rms_mm, worst.1, worst.0
+            "{:26} {ms:6.0} ms  rms {:.2} mm  shape {:.2} mm  fitted model vs true model {rms:.2} mm RMS (after its own translation)  worst {} {:.1} mm",
+            b.name, reg.report.rms_mm, reg.report.shape_rms_mm, worst.1, worst.0
         );
     }
     let q = |v: &mut Vec<f64>, f: f64| {

@@ -34,7 +34,9 @@
 //!    `S`, and a Jacobian column `Σ_k ∂w_k/∂x_j Δ_k` only the targets whose
 //!    weight `x_j` moves (the weights' forward difference; `t`'s columns are
 //!    the identity).
-//!    Gender is bimodal: a few rounds from each end, the better continued.
+//!    Gender is bimodal: a few rounds from each end, the better continued
+//!    (and the other too where the better ends in a local minimum:
+//!    [`RegisterOptions::retry_above_mm`]).
 //! 3. **Non-rigid refinement** of the whole model surface: each round
 //!    pairs every model vertex with its closest scan point as above
 //!    (weight 1 if kept, 0 if not) and solves
@@ -95,6 +97,18 @@ pub struct RegisterOptions {
     /// landmarks' median and 95th-percentile errors are the same after 8
     /// rounds of 2 steps as after 12 of 3, 0.7 and 2–3 mm).
     pub rounds: usize,
+    /// A shape fit whose samples lie farther from the scan than this (RMS,
+    /// mm) is taken for a local minimum: the other gender start is
+    /// continued too, and the better kept. Default 1.0 (the population's
+    /// scan-like copies fit to 0.3–0.6 mm; 1.7–2.2 mm where a start went
+    /// astray).
+    pub retry_above_mm: f64,
+    /// The last retry's start: the scan's height times this. Default 1.02
+    /// (a scan whose crown or soles are missing reads 1–2 % short, and a
+    /// shape fit started that short can settle short: the population body
+    /// pop13 with a 4 cm hole at the crown fitted to 1.4 mm RMS instead of
+    /// 0.5 mm).
+    pub retry_stature_scale: f64,
     /// Levenberg–Marquardt steps per round. Default 2.
     pub lm_steps: usize,
     /// Forward-difference step, parameter units. Default 0.01.
@@ -142,6 +156,8 @@ impl Default for RegisterOptions {
             start_rounds: 3,
             rounds: 8,
             lm_steps: 2,
+            retry_above_mm: 1.0,
+            retry_stature_scale: 1.02,
             fd_step: 0.01,
             prior_weight_mm: 0.5,
             point_to_point_weight: 0.2,
@@ -613,9 +629,9 @@ fn extent(sampled: &Sampled<'_>, params: &MannequinParams) -> Result<(f64, f64, 
 }
 
 /// The rigid start for `gender` (module docs, step 1).
-fn start(sampled: &Sampled<'_>, scan: &TriMesh, gender: f64) -> Result<Fit, MannequinError> {
+fn start(sampled: &Sampled<'_>, scan: &TriMesh, gender: f64, stature_scale: f64) -> Result<Fit, MannequinError> {
     let aabb = scan.aabb();
-    let stature = aabb.size().y;
+    let stature = aabb.size().y * stature_scale;
     let mut params = MannequinParams::default();
     params.macros.gender = gender;
     let (mut lo, mut hi) = (0.0, 1.0);
@@ -651,25 +667,45 @@ pub fn register(
     let sampled = Sampled::new(model, opts.samples);
     let vars = variables();
     // gender is bimodal: a few rounds from each end, the better continued
-    let mut best: Option<Fit> = None;
+    let mut starts = Vec::new();
     for gender in [0.0, 1.0] {
-        let mut fit = start(&sampled, scan, gender)?;
+        let mut fit = start(&sampled, scan, gender, 1.0)?;
         for _ in 0..opts.start_rounds {
             round(&sampled, &scan_q, &vars, &mut fit, opts)?;
         }
-        if best.as_ref().is_none_or(|b| fit.cost < b.cost) {
-            best = Some(fit);
+        starts.push(fit);
+    }
+    starts.sort_by(|a, b| a.cost.total_cmp(&b.cost));
+    // the better start continued; should it end in a local minimum (its samples farther from
+    // the scan than the model's own fit of a body reaches), the other one too, then the better
+    // gender from a taller start (a scan without its crown or soles reads short), the best kept
+    let taller = |gender: f64| -> Result<Fit, RegisterError> {
+        let mut fit = start(&sampled, scan, gender, opts.retry_stature_scale)?;
+        for _ in 0..opts.start_rounds {
+            round(&sampled, &scan_q, &vars, &mut fit, opts)?;
+        }
+        Ok(fit)
+    };
+    let better_gender = starts[0].params.macros.gender;
+    let mut best: Option<(Fit, TriMesh, f64)> = None;
+    let candidates = starts.into_iter().map(Ok).chain(std::iter::once_with(|| taller(better_gender)));
+    for fit in candidates {
+        let mut fit = fit?;
+        for _ in 0..opts.rounds {
+            round(&sampled, &scan_q, &vars, &mut fit, opts)?;
+        }
+        let shaped = model_mesh(model, &fit.params, fit.t)?;
+        let rms = sample_residual(&sampled, &scan_q, &shaped, &fit, opts)?;
+        if best.as_ref().is_none_or(|b| rms < b.2) {
+            best = Some((fit, shaped, rms));
+        }
+        if best.as_ref().is_some_and(|b| b.2 <= opts.retry_above_mm) {
+            break;
         }
     }
-    let mut fit = match best {
-        Some(f) => f,
-        None => start(&sampled, scan, 0.5)?,
+    let Some((fit, shaped, shape_rms_mm)) = best else {
+        return Err(RegisterError::TooFewPairs { pairs: 0, samples: sampled.vertex.len() });
     };
-    for _ in 0..opts.rounds {
-        round(&sampled, &scan_q, &vars, &mut fit, opts)?;
-    }
-    let shaped = model_mesh(model, &fit.params, fit.t)?;
-    let shape_rms_mm = sample_residual(&sampled, &scan_q, &shaped, &fit, opts)?;
     let surface = refine(&scan_q, shaped, opts)?;
     let (rms_mm, p95_mm) = residual(&scan_q, &surface, opts);
     if rms_mm > opts.max_rms_mm || p95_mm > opts.max_p95_mm {
