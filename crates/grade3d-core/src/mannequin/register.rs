@@ -34,9 +34,11 @@
 //!    `S`, and a Jacobian column `Σ_k ∂w_k/∂x_j Δ_k` only the targets whose
 //!    weight `x_j` moves (the weights' forward difference; `t`'s columns are
 //!    the identity).
-//!    Gender is bimodal: a few rounds from each end, the better continued
-//!    (and the other too where the better ends in a local minimum:
-//!    [`RegisterOptions::retry_above_mm`]).
+//!    Gender is bimodal: a few rounds from each end, the better continued;
+//!    where it settles in a local minimum (its samples farther than
+//!    [`RegisterOptions::retry_above_mm`] from the scan), the other too,
+//!    then the better gender from a start [`RegisterOptions::retry_stature_scale`]
+//!    taller (a scan without its crown reads short), the best kept.
 //! 3. **Non-rigid refinement** of the whole model surface: each round
 //!    pairs every model vertex with its closest scan point as above
 //!    (weight 1 if kept, 0 if not) and solves
@@ -48,7 +50,10 @@
 //!    `D`: vertices over holes follow their neighbours), by faer's sparse
 //!    Cholesky.
 //! 4. **Landmarks**: [`hm08_landmarks`] on the registered surface, each
-//!    moved to its closest scan point (not on a fill). Its *confidence* is
+//!    moved to its closest point of the repaired scan (a crotch or armpit
+//!    point may land on a hole's fill, which stands for the skin there;
+//!    derivation snaps it to the surface as it does any landmark). Its
+//!    *confidence* is
 //!    `exp(−d / s)`, `d` the distance it moved and `s` =
 //!    [`RegisterOptions::confidence_scale_mm`].
 //! 5. **Residual**: the distance from scan points (face centroids, fills
