@@ -424,7 +424,6 @@ pub fn derive_features(
     check_midline(&snapped, opts, &mut warnings)?;
     check_heights(&snapped)?;
     check_pairs(&snapped, opts)?;
-    check_limb_sides(&mesh, &snapped, opts)?;
 
     let mut curves = BTreeMap::new();
     for def in vocab::CURVES {
@@ -434,6 +433,7 @@ pub fn derive_features(
         };
         curves.insert(def.id, curve);
     }
+    check_limb_sides(&curves, &snapped, opts)?;
     check_girths(&curves, stature, opts)?;
 
     let mut points = BTreeMap::new();
@@ -628,54 +628,53 @@ fn check_pairs(snapped: &BTreeMap<PointId, DVec3>, opts: &DeriveOptions) -> Resu
     Ok(())
 }
 
-/// Where each of a leg's girth points belongs round the leg: its side,
-/// with the horizontal direction from the leg's centre (left leg; the
-/// right leg's mirror).
-const LEG_POINTS: [(PointId, PointId, &str, DVec3); 12] = {
+/// Where each of a leg's girth points belongs round the leg: its girth
+/// (left, right), its side, with the horizontal direction from the leg's
+/// centre (left leg; the right leg's mirror).
+const LEG_POINTS: [([PointId; 2], [CurveId; 2], &str, DVec3); 12] = {
+    use CurveId as C;
     use PointId as P;
     const OUT: DVec3 = DVec3::X;
     const IN: DVec3 = DVec3::NEG_X;
     const FRONT: DVec3 = DVec3::Z;
     const BACK: DVec3 = DVec3::NEG_Z;
+    const THIGH: [CurveId; 2] = [C::ThighLeft, C::ThighRight];
+    const KNEE: [CurveId; 2] = [C::KneeLeft, C::KneeRight];
+    const ANKLE: [CurveId; 2] = [C::AnkleLeft, C::AnkleRight];
     [
-        (P::ThighLeft, P::ThighRight, "outer side", OUT),
-        (P::KneeLeft, P::KneeRight, "outer side", OUT),
-        (P::AnkleLeft, P::AnkleRight, "outer side", OUT),
-        (P::ThighLeftInner, P::ThighRightInner, "inner side", IN),
-        (P::KneeLeftInner, P::KneeRightInner, "inner side", IN),
-        (P::AnkleLeftInner, P::AnkleRightInner, "inner side", IN),
-        (P::ThighLeftFront, P::ThighRightFront, "front", FRONT),
-        (P::KneeLeftFront, P::KneeRightFront, "front", FRONT),
-        (P::AnkleLeftFront, P::AnkleRightFront, "front", FRONT),
-        (P::ThighLeftBack, P::ThighRightBack, "back", BACK),
-        (P::KneeLeftBack, P::KneeRightBack, "back", BACK),
-        (P::AnkleLeftBack, P::AnkleRightBack, "back", BACK),
+        ([P::ThighLeft, P::ThighRight], THIGH, "outer side", OUT),
+        ([P::KneeLeft, P::KneeRight], KNEE, "outer side", OUT),
+        ([P::AnkleLeft, P::AnkleRight], ANKLE, "outer side", OUT),
+        ([P::ThighLeftInner, P::ThighRightInner], THIGH, "inner side", IN),
+        ([P::KneeLeftInner, P::KneeRightInner], KNEE, "inner side", IN),
+        ([P::AnkleLeftInner, P::AnkleRightInner], ANKLE, "inner side", IN),
+        ([P::ThighLeftFront, P::ThighRightFront], THIGH, "front", FRONT),
+        ([P::KneeLeftFront, P::KneeRightFront], KNEE, "front", FRONT),
+        ([P::AnkleLeftFront, P::AnkleRightFront], ANKLE, "front", FRONT),
+        ([P::ThighLeftBack, P::ThighRightBack], THIGH, "back", BACK),
+        ([P::KneeLeftBack, P::KneeRightBack], KNEE, "back", BACK),
+        ([P::AnkleLeftBack, P::AnkleRightBack], ANKLE, "back", BACK),
     ]
 };
 
 /// A leg's girth points on their lines (issue #17, item 3: a knee point at
 /// the front of the knee, where the side point is meant, made every curve
 /// through the leg miss its neighbours, and the refusal named the ankle):
-/// the angle about the centroid of the leg's horizontal section through
-/// the point, between the point and where it belongs, at most
+/// the angle about the centroid of the point's girth (the leg's centre at
+/// that height), between the point and where it belongs, at most
 /// [`DeriveOptions::max_side_angle_deg`] ([`FeatureError::OffSideLine`]).
+/// Run on the girths already derived: no section of its own.
 fn check_limb_sides(
-    mesh: &TriMesh,
+    curves: &BTreeMap<CurveId, FeatureCurve>,
     snapped: &BTreeMap<PointId, DVec3>,
     opts: &DeriveOptions,
 ) -> Result<(), FeatureError> {
-    for (left, right, side, dir) in LEG_POINTS {
-        for (point, want) in [(left, dir), (right, DVec3::new(-dir.x, dir.y, dir.z))] {
-            let Some(&p) = snapped.get(&point) else { continue };
-            let sections = slice(mesh, &Plane { normal: DVec3::Y, offset: p.y });
-            let Some(leg) = sections.iter().map(|s| &s.polyline).filter(|l| l.closed).min_by(|a, b| {
-                let d = |l: &Polyline| l.closest(p).map_or(f64::INFINITY, |c| c.distance);
-                d(a).total_cmp(&d(b))
-            }) else {
-                continue;
-            };
-            let out = leg.length_centroid();
-            let to = DVec3::new(p.x - out.x, 0.0, p.z - out.z);
+    for (points, girths, side, dir) in LEG_POINTS {
+        let wants = [dir, DVec3::new(-dir.x, dir.y, dir.z)];
+        for ((point, girth), want) in points.into_iter().zip(girths).zip(wants) {
+            let (Some(&p), Some(curve)) = (snapped.get(&point), curves.get(&girth)) else { continue };
+            let centre = curve.polyline.length_centroid();
+            let to = DVec3::new(p.x - centre.x, 0.0, p.z - centre.z);
             if to.length() == 0.0 {
                 continue;
             }
