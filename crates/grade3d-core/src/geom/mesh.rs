@@ -333,43 +333,7 @@ impl TriMesh {
     /// Scans often arrive with vertices split along UV or normal seams; the
     /// slicer needs them welded to chain sections across such seams.
     pub fn welded(&self, tolerance: f64) -> Result<Self, MeshError> {
-        let cell = tolerance.max(f64::MIN_POSITIVE);
-        let key = |p: DVec3| -> [i64; 3] {
-            let q = (p / cell).floor();
-            [q.x as i64, q.y as i64, q.z as i64]
-        };
-        // only looked up, never iterated: the hasher cannot change the result
-        let mut grid: rustc_hash::FxHashMap<[i64; 3], Vec<u32>> = rustc_hash::FxHashMap::default();
-        let mut remap = vec![0u32; self.positions.len()];
-        let mut out: Vec<DVec3> = Vec::with_capacity(self.positions.len());
-        for (i, &p) in self.positions.iter().enumerate() {
-            let k = key(p);
-            let mut found = None;
-            'search: for dx in -1..=1 {
-                for dy in -1..=1 {
-                    for dz in -1..=1 {
-                        if let Some(list) = grid.get(&[k[0] + dx, k[1] + dy, k[2] + dz]) {
-                            for &j in list {
-                                if out[j as usize].distance(p) <= tolerance {
-                                    found = Some(j);
-                                    break 'search;
-                                }
-                            }
-                        }
-                    }
-                }
-            }
-            let id = match found {
-                Some(j) => j,
-                None => {
-                    let j = out.len() as u32;
-                    out.push(p);
-                    grid.entry(k).or_default().push(j);
-                    j
-                }
-            };
-            remap[i] = id;
-        }
+        let (out, remap) = weld_positions(&self.positions, tolerance);
         let tris: Vec<[VertexId; 3]> = self
             .triangles
             .iter()
@@ -379,6 +343,54 @@ impl TriMesh {
         Self::new(out, tris)
     }
 }
+
+/// Welds positions within `tolerance` (grid hashing, first come first
+/// served); returns the kept positions and each input vertex's new index.
+/// Cells are [`WELD_CELLS`] tolerances wide, so a point is near a cell face
+/// (and its neighbour across it must be searched) only on the axes where it
+/// lies within a tolerance of one: usually its own cell alone is searched.
+pub(crate) fn weld_positions(positions: &[DVec3], tolerance: f64) -> (Vec<DVec3>, Vec<u32>) {
+    let cell = (WELD_CELLS * tolerance).max(f64::MIN_POSITIVE);
+    // only looked up, never iterated: the hasher cannot change the result
+    let mut grid: rustc_hash::FxHashMap<[i64; 3], Vec<u32>> = rustc_hash::FxHashMap::default();
+    grid.reserve(positions.len());
+    let mut out: Vec<DVec3> = Vec::with_capacity(positions.len());
+    let mut remap = Vec::with_capacity(positions.len());
+    for &p in positions {
+        let q = p / cell;
+        let base = q.floor();
+        let k = [base.x as i64, base.y as i64, base.z as i64];
+        // per axis, the neighbouring cells within a tolerance: −1, +1 or none
+        let near = |f: f64| -> [i64; 2] {
+            let frac = f - f.floor();
+            [if frac * WELD_CELLS <= 1.0 { -1 } else { 0 }, if (1.0 - frac) * WELD_CELLS <= 1.0 { 1 } else { 0 }]
+        };
+        let [nx, ny, nz] = [near(q.x), near(q.y), near(q.z)];
+        let mut found = None;
+        'search: for dx in nx[0]..=nx[1] {
+            for dy in ny[0]..=ny[1] {
+                for dz in nz[0]..=nz[1] {
+                    if let Some(list) = grid.get(&[k[0] + dx, k[1] + dy, k[2] + dz]) {
+                        if let Some(&j) = list.iter().find(|&&j| out[j as usize].distance(p) <= tolerance) {
+                            found = Some(j);
+                            break 'search;
+                        }
+                    }
+                }
+            }
+        }
+        remap.push(found.unwrap_or_else(|| {
+            let j = out.len() as u32;
+            out.push(p);
+            grid.entry(k).or_default().push(j);
+            j
+        }));
+    }
+    (out, remap)
+}
+
+/// Width of a weld cell, in weld tolerances (see [`weld_positions`]).
+pub(crate) const WELD_CELLS: f64 = 4.0;
 
 /// Boundary loops of a triangle list (vertex ids), each run along its
 /// faces' orientation: chains of half-edges with no opposite half-edge.

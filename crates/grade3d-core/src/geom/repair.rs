@@ -46,7 +46,7 @@ use glam::DVec3;
 use rustc_hash::FxHashMap;
 use serde::{Deserialize, Serialize};
 
-use super::mesh::{MeshError, TriMesh, VertexId};
+use super::mesh::{weld_positions, MeshError, TriMesh, VertexId};
 
 /// Knobs of [`repair`]. Every length is a share of the input's longest
 /// bounding-box side (the stature of a standing body), because the units
@@ -255,54 +255,6 @@ pub fn repair(
     let tris = tris.into_iter().map(|t| t.map(VertexId)).collect();
     Ok((TriMesh::new(pos, tris)?, report))
 }
-
-/// Welds positions within `tolerance` (grid hashing, first come first
-/// served); returns the kept positions and each input vertex's new index.
-/// Cells are [`WELD_CELLS`] tolerances wide, so a point is near a cell face
-/// (and its neighbour across it must be searched) only on the axes where it
-/// lies within a tolerance of one: usually its own cell alone is searched.
-fn weld_positions(positions: &[DVec3], tolerance: f64) -> (Vec<DVec3>, Vec<u32>) {
-    let cell = (WELD_CELLS * tolerance).max(f64::MIN_POSITIVE);
-    // only looked up, never iterated: the hasher cannot change the result
-    let mut grid: FxHashMap<[i64; 3], Vec<u32>> = FxHashMap::default();
-    grid.reserve(positions.len());
-    let mut out: Vec<DVec3> = Vec::with_capacity(positions.len());
-    let mut remap = Vec::with_capacity(positions.len());
-    for &p in positions {
-        let q = p / cell;
-        let base = q.floor();
-        let k = [base.x as i64, base.y as i64, base.z as i64];
-        // per axis, the neighbouring cells within a tolerance: −1, +1 or none
-        let near = |f: f64| -> [i64; 2] {
-            let frac = f - f.floor();
-            [if frac * WELD_CELLS <= 1.0 { -1 } else { 0 }, if (1.0 - frac) * WELD_CELLS <= 1.0 { 1 } else { 0 }]
-        };
-        let [nx, ny, nz] = [near(q.x), near(q.y), near(q.z)];
-        let mut found = None;
-        'search: for dx in nx[0]..=nx[1] {
-            for dy in ny[0]..=ny[1] {
-                for dz in nz[0]..=nz[1] {
-                    if let Some(list) = grid.get(&[k[0] + dx, k[1] + dy, k[2] + dz]) {
-                        if let Some(&j) = list.iter().find(|&&j| out[j as usize].distance(p) <= tolerance) {
-                            found = Some(j);
-                            break 'search;
-                        }
-                    }
-                }
-            }
-        }
-        remap.push(found.unwrap_or_else(|| {
-            let j = out.len() as u32;
-            out.push(p);
-            grid.entry(k).or_default().push(j);
-            j
-        }));
-    }
-    (out, remap)
-}
-
-/// Width of a weld cell, in weld tolerances (see [`weld_positions`]).
-const WELD_CELLS: f64 = 4.0;
 
 /// Union–find root with path halving.
 fn root(parent: &mut [u32], mut v: u32) -> u32 {
