@@ -449,25 +449,28 @@ pub fn fit_size(model: &BodyModel, row: &SizeRow, opts: &FitOptions) -> Result<F
     let profiled: Vec<MeasurementId> = ids.iter().copied().filter(|&id| profile_curve(id).is_some()).collect();
     let mut scales: BTreeMap<MeasurementId, f64> = profiled.iter().map(|&id| (id, 1.0)).collect();
     let mut solver = ScaleSolver::new(profiled.clone(), None, &BTreeMap::new());
-    let mut body = derive_features(base_mesh.clone(), &lm0, &opts.derive)?;
-    let mut measured = measure(&body, &opts.measure);
-    let mut rounds = 0;
+    let body = derive_features(base_mesh.clone(), &lm0, &opts.derive)?;
+    let measured = measure(&body, &opts.measure);
     // profile geometry from the phase-1 body (centres and heights stay fixed)
     let profiles: Vec<(MeasurementId, f64, DVec3)> =
         profiled.iter().filter_map(|&id| profile_frame(&body, id, opts).map(|(y, o)| (id, y, o))).collect();
-    while rounds < opts.scaling_iterations {
-        let worst = profiled
-            .iter()
-            .map(|id| (measured.get(id).copied().unwrap_or(f64::NAN) - row.targets[id]).abs() * MM_PER_M)
-            .fold(0.0, f64::max);
-        if worst < opts.girth_tolerance_mm || profiles.is_empty() {
-            break;
-        }
-        rounds += 1;
-        solver.step(&mut scales, &row.targets, &measured);
-        let positions = scale_profiles(&base_positions, &profiles, &scales, &arms, &lm0, opts.blend_falloff_mm, None);
-        (body, measured) = remeasure(model, positions, opts)?;
-    }
+    // the quick reading's offset from the full one, on the phase-1 body (phase 1 read it quick at `x`)
+    let offset: Measurements = ids
+        .iter()
+        .zip(&r)
+        .filter(|(id, _)| profiled.contains(id))
+        .filter_map(|(&id, r)| Some((id, measured.get(&id)? - (r + row.targets[&id]))))
+        .collect();
+    let targets: BTreeMap<MeasurementId, f64> = profiled.iter().map(|&id| (id, row.targets[&id])).collect();
+    let place = |scales: &BTreeMap<MeasurementId, f64>| {
+        scale_profiles(&base_positions, &profiles, scales, &arms, &lm0, opts.blend_falloff_mm, None)
+    };
+    let start = Solved { body, measured, rounds: 0 };
+    let Solved { body, measured, rounds } = if profiles.is_empty() {
+        start
+    } else {
+        solve_scales(model, &mut solver, &mut scales, &targets, &offset, start, false, place, opts)?
+    };
     let residuals = residuals_of(&ids, row, &measured);
     if let Some(m) = profiled.iter().map(|id| measured.get(id).copied()).collect::<Option<Vec<f64>>>() {
         let sv: Vec<f64> = profiled.iter().map(|id| scales[id]).collect();
@@ -589,6 +592,69 @@ pub struct ScaleJacobian {
     pub jac: Vec<Vec<f64>>,
 }
 
+/// A body of phase 2's rounds, measured in full, and the rounds taken.
+struct Solved {
+    body: FeatureBody,
+    measured: Measurements,
+    rounds: usize,
+}
+
+/// Phase 2's rounds (module docs): from `start` (a body measured in full
+/// at `scales`), Broyden steps of the profile `scales` towards `targets`,
+/// each scaled body (`place`) read by the quick measurement
+/// ([`quick_measure`]: the landmarks and the targeted girths' sections
+/// only, plus `offset`, the full reading's difference from the quick one
+/// on the start body) rather than by a full feature derivation (issue #15:
+/// the full one cut every curve, 2–3 times per size). Once the quick
+/// girths meet [`FitOptions::girth_tolerance_mm`] the body is derived and
+/// measured in full; if that misses the tolerance the rounds go on from
+/// the full reading. `must_step`: take at least one step (heights scale
+/// even where the girths already fit). At most
+/// [`FitOptions::scaling_iterations`] steps.
+#[expect(clippy::too_many_arguments, reason = "one solve's inputs; a struct would only rename them")]
+fn solve_scales(
+    model: &BodyModel,
+    solver: &mut ScaleSolver,
+    scales: &mut BTreeMap<MeasurementId, f64>,
+    targets: &BTreeMap<MeasurementId, f64>,
+    offset: &Measurements,
+    start: Solved,
+    must_step: bool,
+    place: impl Fn(&BTreeMap<MeasurementId, f64>) -> Vec<DVec3>,
+    opts: &FitOptions,
+) -> Result<Solved, FitError> {
+    let ids: Vec<MeasurementId> = targets.keys().copied().collect();
+    let Solved { mut body, mut measured, mut rounds } = start;
+    // the current scales' reading, and their positions while that reading is the quick one
+    let mut reading = measured.clone();
+    let mut unread: Option<Vec<DVec3>> = None;
+    loop {
+        let worst = targets
+            .iter()
+            .map(|(id, t)| (reading.get(id).copied().unwrap_or(f64::NAN) - t).abs() * MM_PER_M)
+            .fold(0.0, f64::max);
+        let stepped = !must_step || rounds > 0;
+        if (worst < opts.girth_tolerance_mm && stepped) || rounds >= opts.scaling_iterations {
+            match unread.take() {
+                None => break,
+                Some(positions) => {
+                    (body, measured) = remeasure(model, positions, opts)?;
+                    reading = measured.clone();
+                    continue;
+                }
+            }
+        }
+        rounds += 1;
+        solver.step(scales, targets, &reading);
+        let positions = place(scales);
+        let mesh = TriMesh::new(positions, model.triangles().to_vec()).map_err(MannequinError::from)?;
+        let quick = quick_measure(model, &mesh, &ids, opts)?;
+        reading = ids.iter().zip(quick).map(|(&id, q)| (id, q + offset.get(&id).copied().unwrap_or(0.0))).collect();
+        unread = Some(mesh.positions().to_vec());
+    }
+    Ok(Solved { body, measured, rounds })
+}
+
 /// The feature body and measurements of hm08 `positions` (a scaled body).
 fn remeasure(
     model: &BodyModel,
@@ -670,27 +736,23 @@ pub fn fit_graded(
     let mut scales: BTreeMap<MeasurementId, f64> = targets.keys().map(|&id| (id, 1.0)).collect();
     let mut solver =
         ScaleSolver::new(targets.keys().copied().collect(), base.scale_jacobian.as_ref(), &base.profile_scales);
-    let mut body = base.body.clone();
-    let mut measured = base.measurements.clone();
-    let mut rounds = 0;
-    loop {
-        let worst = targets
-            .iter()
-            .map(|(id, t)| (measured.get(id).copied().unwrap_or(f64::NAN) - t).abs() * MM_PER_M)
-            .fold(0.0, f64::max);
-        let height_ok = (height_scale - 1.0).abs() < f64::EPSILON || rounds > 0;
-        if (worst < opts.girth_tolerance_mm && height_ok) || rounds >= opts.scaling_iterations {
-            break;
-        }
-        rounds += 1;
-        solver.step(&mut scales, &targets, &measured);
+    // the quick reading's offset from the full one, on the base body
+    let ids_t: Vec<MeasurementId> = targets.keys().copied().collect();
+    let quick = quick_measure(model, base_mesh, &ids_t, opts)?;
+    let offset: Measurements =
+        ids_t.iter().zip(quick).filter_map(|(&id, q)| Some((id, base.measurements.get(&id)? - q))).collect();
+    let place = |scales: &BTreeMap<MeasurementId, f64>| {
         let mut positions =
-            scale_profiles(&base_positions, &profiles, &scales, &arms, &lm0, f64::INFINITY, legs.as_ref());
+            scale_profiles(&base_positions, &profiles, scales, &arms, &lm0, f64::INFINITY, legs.as_ref());
         for p in &mut positions {
             p.y = y_floor + height_scale * (p.y - y_floor);
         }
-        (body, measured) = remeasure(model, positions, opts)?;
-    }
+        positions
+    };
+    let start = Solved { body: base.body.clone(), measured: base.measurements.clone(), rounds: 0 };
+    let must_step = (height_scale - 1.0).abs() >= f64::EPSILON;
+    let Solved { body, measured, rounds } =
+        solve_scales(model, &mut solver, &mut scales, &targets, &offset, start, must_step, place, opts)?;
     let residuals = residuals_of(&ids, row, &measured);
     Ok(FittedMannequin {
         size: row.size.clone(),
