@@ -86,6 +86,7 @@ fn benches(c: &mut Criterion) {
         let ctx = WorkContext {
             renderer: Some(std::sync::Arc::new(renderer)),
             obstacles: std::sync::Arc::new(ObstacleCache::new(ObstacleCacheOptions::default())),
+            blocks: Default::default(),
             opts: WorkOptions::default(),
         };
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/bodies");

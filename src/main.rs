@@ -231,6 +231,7 @@ fn grade_offline(args: &GradeArgs) -> Result<(), Box<dyn std::error::Error>> {
     let ctx = WorkContext {
         renderer,
         obstacles: std::sync::Arc::new(ObstacleCache::new(ObstacleCacheOptions::default())),
+        blocks: Default::default(),
         opts: WorkOptions::default(),
     };
     let bar = indicatif::ProgressBar::new(0);

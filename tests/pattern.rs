@@ -506,3 +506,61 @@ fn exports_pass_the_ezdxf_check() {
         let _ = std::fs::remove_dir_all(&dir);
     }
 }
+
+/// Issue #15, a scan's darts from its template's block
+/// ([`DartSource::Block`]), with planted answers on a fixture body: a block
+/// that is the body's own decided plan gives the decided pattern; a block
+/// whose dart is no line of the panel (it cannot be slit) falls back to
+/// deciding on the body, the same pattern again; the trousers' block made
+/// on the reference body holds on the fixture (its darts carried, each
+/// opening by at least the least intake).
+#[test]
+fn a_block_is_carried_where_it_holds_and_decided_where_not() {
+    use grade3d::pattern::garment::{DartSource, PatternOptions, PlannedDart};
+    use grade3d::pipeline::grade_with_darts;
+    use grade3d::template::library::reference_body;
+    let renderer = Renderer::new(RendererChoice::Auto).expect("a depth-map renderer (the one the service picks)");
+    let obstacle_of = |mesh: &grade3d::geom::mesh::TriMesh| Obstacle {
+        maps: renderer.depth_maps(mesh, &RenderOptions::default()).unwrap(),
+        tree: WindingTree::new(mesh, &WindingOptions::default()),
+    };
+    let t = builtin().unwrap().into_iter().find(|t| t.name == "trousers").unwrap();
+    let (name, mesh, lm) =
+        fixture_bodies().into_iter().find(|(n, _, _)| n == "bodies/female-average-caucasian").expect("the fixture");
+    let body = derive_features(mesh, &lm, &DeriveOptions::default()).unwrap();
+    let obstacle = obstacle_of(&body.mesh);
+    let go = GradeOptions::default();
+    let grade = |darts: DartSource<'_>| grade_with_darts(&t, &body, Some(&obstacle), &name, &go, darts).unwrap();
+    let decided = grade(DartSource::Decide);
+    assert!(!decided.pattern.dart_plan.found.is_empty(), "the trousers find darts on this body");
+    // its own plan as a block: the same pattern
+    let own = grade(DartSource::Block(&decided.pattern.dart_plan));
+    assert_eq!(own.pattern.pieces, decided.pattern.pieces);
+    assert_eq!(own.pattern.dart_plan.found, decided.pattern.dart_plan.found);
+    // a block whose dart runs through vertices its panel lacks: decided here instead
+    let mut broken = decided.pattern.dart_plan.clone();
+    broken.found.push(PlannedDart {
+        panel: broken.found[0].panel.clone(),
+        name: "dart_auto_nowhere".into(),
+        chain: vec![grade3d::geom::mesh::VertexId::from(u32::MAX as usize - 1)],
+    });
+    let fell_back = grade(DartSource::Block(&broken));
+    assert_eq!(fell_back.pattern.pieces, decided.pattern.pieces);
+    assert_eq!(fell_back.pattern.dart_plan, decided.pattern.dart_plan);
+    // the block made on the reference body holds here: carried, every dart opening
+    let reference = reference_body().unwrap();
+    let block = grade_with_darts(&t, &reference, Some(&obstacle_of(&reference.mesh)), "block", &go, DartSource::Decide)
+        .unwrap()
+        .pattern
+        .dart_plan;
+    let carried = grade(DartSource::Block(&block));
+    assert_eq!(carried.pattern.dart_plan.found, block.found, "the block held");
+    let least = PatternOptions::default().min_dart_intake_mm;
+    for r in &carried.pattern.reports {
+        for d in &r.found_darts {
+            assert_eq!(d.origin, grade3d::pattern::darts::DartOrigin::Carried);
+            assert!(d.intake_mm >= least, "{} {}: {} mm", r.name, d.name, d.intake_mm);
+        }
+        assert_eq!(r.distortion.flipped, 0);
+    }
+}

@@ -3,6 +3,10 @@
 //! (re-meshed to an unrelated topology, 1 mm normal noise, landmarks given
 //! as points only).
 //!
+//! Every body's darts start from its template's block, as a scan's do in
+//! the service (`grade3d::service::blocks`; the template graded on its
+//! reference body): carried where they hold, decided on the body where not.
+//!
 //! Two tests, which run side by side: the first [`CI_BODIES`] (the planted
 //! extremes and two draws) and the other draws; all 40 bodies in CI
 //! (about 190 s on two cores):
@@ -43,9 +47,10 @@ use grade3d::geom::winding::{penetration_stats, WindingOptions, WindingTree};
 use grade3d::mannequin::landmarks::hm08_landmarks;
 use grade3d::mannequin::model::BodyModel;
 use grade3d::mannequin::population::{sample_population, scan_like};
+use grade3d::pattern::garment::{DartPlan, DartSource};
 use grade3d::pattern::lines;
-use grade3d::pipeline::{grade, GradeOptions};
-use grade3d::template::library::builtin;
+use grade3d::pipeline::{grade, grade_with_darts, GradeOptions};
+use grade3d::template::library::{builtin, reference_body};
 
 /// The population's seed (any fixed value; this one is the issue's number).
 const SEED: u64 = 13;
@@ -107,6 +112,20 @@ impl Worst {
 fn run(range: std::ops::Range<usize>) {
     let renderer = Renderer::new(RendererChoice::Auto).expect("a depth-map renderer (the one the service picks)");
     let library = builtin().unwrap();
+    // each template's block, as the service makes it (`grade3d::service::blocks`): graded on the
+    // reference body, its darts decided there; every body's darts start from it, as a scan's do
+    let reference = reference_body().unwrap();
+    let reference_obstacle = Obstacle {
+        maps: renderer.depth_maps(&reference.mesh, &RenderOptions::default()).unwrap(),
+        tree: WindingTree::new(&reference.mesh, &WindingOptions::default()),
+    };
+    let blocks: Vec<DartPlan> = library
+        .iter()
+        .map(|t| grade(t, &reference, Some(&reference_obstacle), "block", &GradeOptions::default()).unwrap())
+        .map(|g| g.pattern.dart_plan)
+        .collect();
+    // grades whose found darts are their block's (the block held, or there was none to carry)
+    let mut block_held = 0usize;
     let mut deepest: BTreeMap<String, Worst> = BTreeMap::new();
     let mut inside: BTreeMap<String, usize> = BTreeMap::new();
     let mut pairs_before: BTreeMap<String, usize> = BTreeMap::new();
@@ -144,8 +163,9 @@ fn run(range: std::ops::Range<usize>) {
         }
         let maps = renderer.depth_maps(&body.mesh, &RenderOptions::default()).unwrap();
         let obstacle = Obstacle { maps, tree: WindingTree::new(&body.mesh, &WindingOptions::default()) };
-        for t in &library {
-            let g = match grade(t, &body, Some(&obstacle), &name, &GradeOptions::default()) {
+        for (t, block) in library.iter().zip(&blocks) {
+            let darts = DartSource::Block(block);
+            let g = match grade_with_darts(t, &body, Some(&obstacle), &name, &GradeOptions::default(), darts) {
                 Ok(g) => g,
                 Err(e) => {
                     failures.push(format!("{} on {name}: {e}", t.name));
@@ -153,6 +173,9 @@ fn run(range: std::ops::Range<usize>) {
                 }
             };
             grades += 1;
+            if g.pattern.dart_plan.found == block.found {
+                block_held += 1;
+            }
             let at = |what: &str| format!("{} {what} on {name}", t.name);
             let key = t.name.clone();
             let pen = penetration_stats(&obstacle.tree, &g.mesh.positions.raw);
@@ -260,7 +283,7 @@ fn run(range: std::ops::Range<usize>) {
             }
         }
     }
-    eprintln!("{grades} grades");
+    eprintln!("{grades} grades; the darts of {block_held} are their block's");
     for (t, w) in &deepest {
         eprintln!(
             "{t}: deepest vertex {:.3} mm ({}); {} vertices inside over all bodies; \

@@ -219,6 +219,7 @@ fn twenty_scans_as_they_come_are_graded_without_landmarks() {
     let ctx = WorkContext {
         renderer: Some(Arc::new(renderer)),
         obstacles: Arc::new(ObstacleCache::new(ObstacleCacheOptions::default())),
+        blocks: Default::default(),
         opts: WorkOptions::default(),
     };
     let templates = builtin().unwrap();

@@ -28,7 +28,7 @@ use serde::{Deserialize, Serialize};
 use crate::body::feature::FeatureBody;
 use crate::collide::Obstacle;
 use crate::geom::mesh::VertexId;
-use crate::pattern::garment::{pattern_with_plan, DartPlan, GarmentPattern, PatternError, PatternOptions};
+use crate::pattern::garment::{pattern_with_darts, DartPlan, DartSource, GarmentPattern, PatternError, PatternOptions};
 use crate::refine::clear::{clear_coarse, clear_surface, ClearError, ClearOptions};
 use crate::refine::collision::{Collider, CollisionOptions, CollisionReport};
 use crate::refine::lineage::{node_vertex, Lineage};
@@ -248,6 +248,22 @@ pub fn grade_with_plan(
     opts: &GradeOptions,
     plan: Option<&DartPlan>,
 ) -> Result<Graded, PipelineError> {
+    grade_with_darts(t, body, obstacle, size, opts, DartSource::from(plan))
+}
+
+/// [`grade`], the pattern's darts from `darts` ([`DartSource`]: decided on
+/// this body, a run's plan, or the template's block).
+///
+/// # Errors
+/// [`PipelineError`].
+pub fn grade_with_darts(
+    t: &Template,
+    body: &FeatureBody,
+    obstacle: Option<&Obstacle>,
+    size: &str,
+    opts: &GradeOptions,
+    darts: DartSource<'_>,
+) -> Result<Graded, PipelineError> {
     opts.check()?;
     let levels = opts.levels.unwrap_or(t.defaults.levels as usize);
     let clearance_mm = opts.clearance_mm.unwrap_or(t.defaults.clearance_mm);
@@ -310,7 +326,7 @@ pub fn grade_with_plan(
     let topology = Topology { triangles: &mesh.triangles, nodes: &decoded };
     let symmetric = symmetrize(t, body, cut_from, Some(topology), &opts.symmetry);
     let cut_from = symmetric.as_deref().unwrap_or(cut_from);
-    let pattern = pattern_with_plan(t, cut_from, &mesh.triangles, &lineage, size, &pattern_opts, plan)?;
+    let pattern = pattern_with_darts(t, cut_from, &mesh.triangles, &lineage, size, &pattern_opts, darts)?;
     let pattern_ms = ms(start);
     let girth_lines = girth_lines(t, body, &decoded, &hung, &mesh);
     let cut_positions = cut_from.to_owned();

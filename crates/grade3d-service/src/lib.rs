@@ -21,6 +21,7 @@ use grade3d_core::{body, geom, mannequin, pattern, pipeline, refine, template};
 use grade3d_io as io;
 
 pub mod api;
+pub mod blocks;
 pub mod collide;
 
 use std::path::PathBuf;
@@ -173,6 +174,8 @@ pub struct Inner {
     pub renderer: OnceLock<Option<Arc<Renderer>>>,
     /// Mannequin depth maps and winding trees.
     pub obstacles: Arc<ObstacleCache>,
+    /// The templates' blocks ([`blocks`]), made as the service starts.
+    pub blocks: Arc<blocks::BlockCache>,
     /// Synchronous results.
     pub results: ResultCache,
     /// The bounded pool.
@@ -219,6 +222,7 @@ impl AppState {
             jobs,
             renderer: OnceLock::new(),
             obstacles: Arc::new(ObstacleCache::new(ObstacleCacheOptions::default())),
+            blocks: Default::default(),
             pool,
             metrics: Metrics::new(),
             pending_jobs: Default::default(),
@@ -257,6 +261,24 @@ impl AppState {
                 }
             };
             let _ = me.0.renderer.set(renderer);
+            // the live templates' blocks, made now rather than by their first scan (a scan that
+            // comes first waits for the same build)
+            let templates: Vec<Template> = match me.0.store.list() {
+                Ok(entries) => entries
+                    .iter()
+                    .filter_map(|e| me.0.store.get_json(&e.name, None).ok())
+                    .filter_map(|(_, json)| Template::from_json(&json).ok())
+                    .collect(),
+                Err(e) => {
+                    tracing::warn!(error = %e, "no blocks made at start: the template store could not be listed");
+                    Vec::new()
+                }
+            };
+            if let Ok(ctx) = me.work_context() {
+                let start = std::time::Instant::now();
+                let made = ctx.blocks(&templates).iter().filter(|b| b.is_some()).count();
+                tracing::info!(templates = templates.len(), made, ms = start.elapsed().as_millis(), "blocks made");
+            }
         });
     }
 
@@ -292,6 +314,7 @@ impl AppState {
         Ok(WorkContext {
             renderer,
             obstacles: Arc::clone(&self.0.obstacles),
+            blocks: Arc::clone(&self.0.blocks),
             opts: WorkOptions { max_scan_vertices: self.0.cfg.max_scan_vertices, ..WorkOptions::default() },
         })
     }

@@ -18,9 +18,12 @@
 //!   scanner gives it (issue #17): repaired, its units, up axis and facing
 //!   found, and its landmarks — where the request lacks any the vocabulary
 //!   requires — read off the embedded model registered to it
-//!   ([`grade3d_core::scan`]); the report says what was done.
-//! - [`bodies`]: many scans × templates (the batch flow's bodies part); with
-//!   several bodies the base body's dart plan is carried to the others.
+//!   ([`grade3d_core::scan`]); the report says what was done. Its darts
+//!   start from each template's block ([`crate::blocks`], issue #15):
+//!   carried where they hold on the body, decided on it where not.
+//! - [`bodies`]: many scans × templates (the batch flow's bodies part); the
+//!   base body's darts start from the blocks, as a scan's, and with several
+//!   bodies the base body's dart plan is carried to the others.
 //!
 //! Determinism: every artefact is a function of the inputs only — the base
 //! size first, then the others (side by side on rayon's global pool, each
@@ -34,6 +37,7 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
+use crate::blocks::BlockCache;
 use crate::body::derive::{FeatureError, Landmarks};
 use crate::body::feature::FeatureBody;
 use crate::body::frame::FrameHints;
@@ -49,11 +53,11 @@ use crate::mannequin::model::{BodyModel, MannequinError};
 use crate::mannequin::size_chart::{Sex, SizeChart};
 use crate::pattern::export::rul::{self, Created};
 use crate::pattern::export::{dxf, svg, ExportError};
-use crate::pattern::garment::DartPlan;
+use crate::pattern::garment::{DartPlan, DartSource};
 use crate::pattern::grade::{grade_rules, nests, GradeError};
 use crate::pattern::piece::PatternPiece;
 use crate::pattern::true_up::{true_nest, TrueOptions, TrueReport};
-use crate::pipeline::{grade_with_plan, GradeOptions, Graded, PipelineError};
+use crate::pipeline::{grade_with_darts, GradeOptions, Graded, PipelineError};
 use crate::report::{BodiesReport, BodyReport, Flow, MannequinReport, Report, SizeChartReport, SizeReport};
 use crate::store::Entry;
 use crate::template::format::Template;
@@ -206,6 +210,11 @@ pub struct WorkOptions {
     pub true_nest: TrueOptions,
     /// Reading a scan: repair, frame, automatic landmarks, derivation.
     pub scan: ScanOptions,
+    /// A scan's (or a body run's base body's) darts start from the
+    /// template's block ([`crate::blocks`]: its dart plan on the body it
+    /// was designed on), carried where they hold on the body; false: decided
+    /// on the body, searched where a piece strains. Default true.
+    pub block_darts: bool,
 }
 
 impl Default for WorkOptions {
@@ -216,6 +225,7 @@ impl Default for WorkOptions {
             render: RenderOptions::default(),
             true_nest: TrueOptions::default(),
             scan: ScanOptions::default(),
+            block_darts: true,
         }
     }
 }
@@ -230,6 +240,8 @@ pub struct WorkContext {
     pub renderer: Option<Arc<Renderer>>,
     /// Depth maps and winding trees of mannequins.
     pub obstacles: Arc<ObstacleCache>,
+    /// The templates' blocks ([`crate::blocks`]).
+    pub blocks: Arc<BlockCache>,
     /// Knobs.
     pub opts: WorkOptions,
 }
@@ -250,6 +262,10 @@ pub mod stage {
     pub const CLEAR: &str = "clear";
     /// Panels, flattening, pieces.
     pub const PATTERN: &str = "pattern";
+    /// Making the templates' blocks ([`crate::blocks`]; once per process
+    /// and template, so in a running service only the first request with a
+    /// template not yet blocked spends it).
+    pub const BLOCK: &str = "block";
     /// Writing SVG, DXF, GLB, JSON.
     pub const EXPORT: &str = "export";
 }
@@ -284,6 +300,36 @@ impl WorkContext {
         };
         timer.add(stage::OBSTACLE, start);
         Ok(Some(obstacle))
+    }
+
+    /// The block of each of `templates`, in order ([`crate::blocks`]): kept,
+    /// or made now and kept; `None` for a template with none (no renderer
+    /// — the block is a grade with collision —, [`WorkOptions::block_darts`]
+    /// off, or a template that cannot be graded on the reference body).
+    pub fn blocks(&self, templates: &[Template]) -> Vec<Option<Arc<DartPlan>>> {
+        templates
+            .iter()
+            .map(|t| {
+                if !self.opts.block_darts || self.renderer.is_none() {
+                    return None;
+                }
+                self.blocks.get_or_build(t, || self.block_of(t))
+            })
+            .collect()
+    }
+
+    /// `t`'s block: graded on the reference body, its darts decided there.
+    /// (Why not, in words, for the log: it is never a request's error.)
+    fn block_of(&self, t: &Template) -> Result<DartPlan, String> {
+        static REFERENCE: std::sync::OnceLock<Result<FeatureBody, String>> = std::sync::OnceLock::new();
+        let body = REFERENCE
+            .get_or_init(|| crate::template::library::reference_body().map_err(|e| e.to_string()))
+            .as_ref()
+            .map_err(|e| format!("the reference body: {e}"))?;
+        let obstacle = self.obstacle(&body.mesh, true, &mut Timer(BTreeMap::new())).map_err(|e| e.to_string())?;
+        let g = grade_with_darts(t, body, obstacle.as_deref(), "block", &self.opts.grade, DartSource::Decide)
+            .map_err(|e| format!("graded on the reference body: {e}"))?;
+        Ok(g.pattern.dart_plan)
     }
 }
 
@@ -426,7 +472,9 @@ type Done<R> = (Vec<(String, Graded, FitReport)>, R, Vec<Artefact>);
 
 /// Grades every template on one body and writes its per-size artefacts;
 /// `plans[i]`, where given, is template `i`'s dart plan from the run's base
-/// size (unless [`crate::pattern::garment::PatternOptions::search_every_size`]).
+/// size (unless [`crate::pattern::garment::PatternOptions::search_every_size`]);
+/// without plans, `blocks[i]`, where given, is template `i`'s block
+/// ([`crate::blocks`]), else its darts are decided on this body.
 #[expect(clippy::too_many_arguments, reason = "one body of a run: its inputs, the run's plans, timer and artefacts")]
 fn grade_body(
     ctx: &WorkContext,
@@ -435,18 +483,20 @@ fn grade_body(
     obstacle: Option<&Obstacle>,
     size: &str,
     plans: Option<&[DartPlan]>,
+    blocks: &[Option<Arc<DartPlan>>],
     timer: &mut Timer,
     out: &mut Vec<Artefact>,
 ) -> Result<Vec<(String, Graded, FitReport)>, WorkError> {
     let mut graded = Vec::with_capacity(templates.len());
     let carry = !ctx.opts.grade.pattern.search_every_size;
     for (i, t) in templates.iter().enumerate() {
-        let plan = plans.filter(|_| carry).and_then(|p| p.get(i));
-        let g = grade_with_plan(t, body, obstacle, size, &ctx.opts.grade, plan).map_err(|source| WorkError::Grade {
-            template: t.name.clone(),
-            size: size.to_owned(),
-            source,
-        })?;
+        let darts = match (plans, blocks.get(i).and_then(Option::as_deref)) {
+            (Some(p), _) => p.get(i).filter(|_| carry).map_or(DartSource::Decide, DartSource::Run),
+            (None, Some(block)) => DartSource::Block(block),
+            (None, None) => DartSource::Decide,
+        };
+        let g = grade_with_darts(t, body, obstacle, size, &ctx.opts.grade, darts)
+            .map_err(|source| WorkError::Grade { template: t.name.clone(), size: size.to_owned(), source })?;
         timer.add_ms(stage::DECODE, g.timings.decode_ms);
         timer.add_ms(stage::REFINE, g.timings.refine_ms);
         timer.add_ms(stage::CLEAR, g.timings.clear_ms);
@@ -690,7 +740,8 @@ pub fn size_chart(
         let row = &chart.rows[i];
         progress(stage::REFINE, done, total);
         let mut out = Vec::new();
-        let graded = grade_body(ctx, templates, &fitted.body, obstacle.as_deref(), &row.size, plans, timer, &mut out)?;
+        let graded =
+            grade_body(ctx, templates, &fitted.body, obstacle.as_deref(), &row.size, plans, &[], timer, &mut out)?;
         let mannequin = MannequinReport {
             residuals: fitted.residuals.iter().map(|(id, r)| (id.as_str().to_owned(), r.into())).collect(),
             warnings: fitted.body.warnings.clone(),
@@ -761,6 +812,10 @@ pub fn bodies(
     let mut reports = Vec::new();
     let total = inputs.len();
     let base_at = base.and_then(|b| inputs.iter().position(|i| i.name == b)).unwrap_or(0);
+    // the base body's darts start from each template's block
+    let start = Instant::now();
+    let blocks = ctx.blocks(templates);
+    timer.add(stage::BLOCK, start);
     // one body prepared (`done` bodies started before it): read, its features derived, its obstacle
     let prepare_body = |(i, done): (usize, usize), timer: &mut Timer| -> Result<Prepared<ReadBody>, WorkError> {
         progress(stage::BODY, done, total);
@@ -779,7 +834,8 @@ pub fn bodies(
         let input = &inputs[i];
         progress(stage::REFINE, done, total);
         let mut out = Vec::new();
-        let graded = grade_body(ctx, templates, body, obstacle.as_deref(), input.name, plans, timer, &mut out)?;
+        let graded =
+            grade_body(ctx, templates, body, obstacle.as_deref(), input.name, plans, &blocks, timer, &mut out)?;
         let about = BodyReport {
             body: input.name.to_owned(),
             measurements_m: measure(body, &MeasureOptions::default())

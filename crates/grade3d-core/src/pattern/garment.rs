@@ -321,9 +321,84 @@ pub fn pattern_with_plan(
     opts: &PatternOptions,
     plan: Option<&DartPlan>,
 ) -> Result<GarmentPattern, PatternError> {
-    let mut g = pattern_darts(t, positions, triangles, lineage, size, opts, plan)?;
-    pair_pieces(t, &mut g, plan.map(|p| p.cut_pairs.as_slice()), opts);
+    pattern_with_darts(t, positions, triangles, lineage, size, opts, DartSource::from(plan))
+}
+
+/// Where the darts of a pattern come from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum DartSource<'a> {
+    /// Decided on this body: every declared dart that opens is kept, and
+    /// darts are searched where a piece still strains ([`pattern_with_plan`]
+    /// without a plan).
+    Decide,
+    /// A grade run's plan, decided on its base size, carried as it is: the
+    /// same darts and the same cut pairs in every size of the run.
+    Run(&'a DartPlan),
+    /// The template's *block*: its plan on the body it was designed on
+    /// (issue #15; made-to-measure as a pattern maker drafts it: the
+    /// customer's pattern is the style's block altered, its darts where
+    /// the block has them, each opening by what this body needs). Carried
+    /// where it holds on this body — every dart opens by at least
+    /// [`PatternOptions::min_dart_intake_mm`] with legs that do not cross,
+    /// no piece folds, no sew or cut line crosses itself, no line is left
+    /// unclean — else decided here as by [`DartSource::Decide`]. Mirror
+    /// pairs are paired on this body either way (a scan's halves differ).
+    Block(&'a DartPlan),
+}
+
+impl<'a> From<Option<&'a DartPlan>> for DartSource<'a> {
+    /// A run's plan where given, else [`DartSource::Decide`].
+    fn from(plan: Option<&'a DartPlan>) -> Self {
+        plan.map_or(DartSource::Decide, DartSource::Run)
+    }
+}
+
+/// [`pattern_with_plan`] with its darts from `source` ([`DartSource`]).
+/// The result's [`GarmentPattern::dart_plan`] is the plan used; with a
+/// block that did not hold, the one decided here.
+///
+/// # Errors
+/// [`PatternError`]; [`PatternError::CarriedDart`] when a run's planned
+/// chain is not a line of this mesh's panel (a block's falls back to
+/// deciding here).
+pub fn pattern_with_darts(
+    t: &Template,
+    positions: &TiSlice<VertexId, DVec3>,
+    triangles: &TiSlice<FaceId, [VertexId; 3]>,
+    lineage: &Lineage,
+    size: &str,
+    opts: &PatternOptions,
+    source: DartSource<'_>,
+) -> Result<GarmentPattern, PatternError> {
+    let (mut g, decided) = match source {
+        DartSource::Decide => (pattern_darts(t, positions, triangles, lineage, size, opts, None)?, None),
+        DartSource::Run(plan) => {
+            (pattern_darts(t, positions, triangles, lineage, size, opts, Some(plan))?, Some(plan.cut_pairs.as_slice()))
+        }
+        DartSource::Block(plan) => {
+            let carried = carry_plan(t, positions, triangles, lineage, size, opts, plan).ok();
+            let g = match carried.filter(|(g, checks)| block_holds(g, checks, opts)) {
+                Some((g, _)) => g,
+                None => pattern_darts(t, positions, triangles, lineage, size, opts, None)?,
+            };
+            (g, None)
+        }
+    };
+    pair_pieces(t, &mut g, decided, opts);
     Ok(g)
+}
+
+/// Whether a pattern made with carried darts holds (module docs of
+/// [`DartSource::Block`]): every dart (declared or carried) opens by at
+/// least [`PatternOptions::min_dart_intake_mm`], no piece folds, no sew or
+/// cut line crosses itself, and no internal line is left unclean.
+fn block_holds(g: &GarmentPattern, checks: &[DartCheck], opts: &PatternOptions) -> bool {
+    let opens = checks.iter().all(|(_, opening, crossing)| !crossing && *opening >= opts.min_dart_intake_mm);
+    let unfolded = g
+        .reports
+        .iter()
+        .all(|r| r.distortion.flipped == 0 && !r.sew_line_self_intersects && !r.cut_line_self_intersects);
+    opens && unfolded && g.pieces.iter().all(|p| super::lines::line_problems(p).is_empty())
 }
 
 /// The pieces of every template mirror pair: cut as one (the first panel's
@@ -384,16 +459,12 @@ fn pattern_darts(
     opts: &PatternOptions,
     plan: Option<&DartPlan>,
 ) -> Result<GarmentPattern, PatternError> {
+    if let Some(plan) = plan {
+        return Ok(carry_plan(t, positions, triangles, lineage, size, opts, plan)?.0);
+    }
     // cut once: each pass below slits its darts into copies of these panels
     let plain = cut_plain(t, positions, triangles, lineage)?;
     let mut tt = t.clone();
-    if let Some(plan) = plan {
-        tt.darts.retain(|d| !plan.left_out.iter().any(|(name, _)| *name == d.name));
-        let (mut g, _) = pattern_once(&tt, positions, &plain, lineage, size, opts, Search::Carry(&plan.found))?;
-        g.darts_left_out = plan.left_out.clone();
-        g.dart_plan.left_out = plan.left_out.clone();
-        return Ok(g);
-    }
     let mut left_out = Vec::new();
     loop {
         let (mut g, darts) = pattern_once(&tt, positions, &plain, lineage, size, opts, Search::None)?;
@@ -426,6 +497,28 @@ fn pattern_darts(
             }
         }
     }
+}
+
+/// [`pattern_darts`] with `plan`'s darts carried: the declared darts it
+/// leaves out are left out, its found darts slit along the same chains;
+/// with every dart's opening and whether its piece's sew line crosses
+/// itself.
+fn carry_plan(
+    t: &Template,
+    positions: &TiSlice<VertexId, DVec3>,
+    triangles: &TiSlice<FaceId, [VertexId; 3]>,
+    lineage: &Lineage,
+    size: &str,
+    opts: &PatternOptions,
+    plan: &DartPlan,
+) -> Result<(GarmentPattern, Vec<DartCheck>), PatternError> {
+    let plain = cut_plain(t, positions, triangles, lineage)?;
+    let mut tt = t.clone();
+    tt.darts.retain(|d| !plan.left_out.iter().any(|(name, _)| *name == d.name));
+    let (mut g, checks) = pattern_once(&tt, positions, &plain, lineage, size, opts, Search::Carry(&plan.found))?;
+    g.darts_left_out = plan.left_out.clone();
+    g.dart_plan.left_out = plan.left_out.clone();
+    Ok((g, checks))
 }
 
 /// The name of the mirror image of a left or right dart (`dart_front_left`
