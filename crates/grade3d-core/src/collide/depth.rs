@@ -105,32 +105,69 @@ pub struct DepthMap {
     /// empty (issue #15: a body covers 36–42 % of its views' pixels within
     /// such runs, so a body's maps take 13 MB instead of 32).
     rows: Vec<[u32; 3]>,
-    /// Nearest surface along `d` per stored pixel, as rendered (RGBA8): the
-    /// depth code in RGB (24 bits, R most significant; [`encode_depth`],
-    /// [`DepthMap::front_depth`]), A 255 where the body covers the pixel
-    /// and 0 where it is empty.
-    front: Vec<[u8; 4]>,
-    /// Farthest surface along `d`, as `front`.
-    back: Vec<[u8; 4]>,
-    /// Outward unit normal of the nearest surface per stored pixel, as
-    /// rendered: each component `n·½ + ½` in unorm8 in RGB
-    /// ([`encode_normal`], [`decode_normal`]), A unused.
-    front_normal: Vec<[u8; 4]>,
-    /// Outward unit normal of the farthest surface, as `front_normal`.
-    back_normal: Vec<[u8; 4]>,
+    /// The stored pixels.
+    pixels: Pixels,
 }
 
-/// Consecutive rows of a depth map as a renderer encodes them
+/// The stored pixels of a [`DepthMap`], in the order of its rows' runs.
+#[derive(Debug, Clone, PartialEq)]
+enum Pixels {
+    /// As a GPU renderer wrote them (RGBA8).
+    Encoded {
+        /// Nearest surface along `d`: the depth code in RGB (24 bits, R
+        /// most significant; [`encode_depth`], [`DepthMap::front_depth`]),
+        /// A 255 where the body covers the pixel and 0 where it is empty.
+        front: Vec<[u8; 4]>,
+        /// Farthest surface along `d`, as `front`.
+        back: Vec<[u8; 4]>,
+        /// Outward unit normal of the nearest surface: each component
+        /// `n·½ + ½` in unorm8 in RGB ([`encode_normal`],
+        /// [`decode_normal`]), A unused.
+        front_normal: Vec<[u8; 4]>,
+        /// Outward unit normal of the farthest surface, as `front_normal`.
+        back_normal: Vec<[u8; 4]>,
+    },
+    /// As the CPU rasteriser left them (issue #15): per pixel the clip
+    /// depth and the face of the nearest and the farthest surface, and per
+    /// face its interpolated normal as a function of the pixel centre. A
+    /// pixel is encoded when it is read, exactly as the GPU path encodes
+    /// it ([`encode_depth_code`], [`encode_normal`] of the normalised
+    /// normal), so both read the same values; the collision reads a few
+    /// thousand of a map's half million stored pixels, and encoding them
+    /// all was half of the rasteriser's time.
+    Faces {
+        /// Clip depth `[nearest, farthest]` per stored pixel.
+        z: Vec<[f32; 2]>,
+        /// Their faces ([`NO_FACE`] where the pixel is empty).
+        face: Vec<[u32; 2]>,
+        /// Per face, its vertex normals interpolated,
+        /// `n(x, y) = n₀ + n_x x + n_y y` at pixel coordinates (not
+        /// normalised).
+        normals: Vec<FaceNormal>,
+    },
+}
+
+/// Face id of an empty pixel in a rasteriser's [`BandRows`].
+pub const NO_FACE: u32 = u32::MAX;
+
+/// A face's vertex normals interpolated over a view's pixels:
+/// `[n₀, n_x, n_y]`, `n(x, y) = n₀ + n_x x + n_y y` (not normalised) at
+/// pixel coordinates (`x` right, `y` down, pixel `(i, j)` centred at
+/// `(i + ½, j + ½)`).
+pub type FaceNormal = [glam::Vec3; 3];
+
+/// Consecutive rows of a depth map as the CPU rasteriser leaves them
 /// ([`DepthMap::from_bands`]).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct BandRows {
     /// Per row its covered run `(x0, x1)`: pixels `x0..x1` from its first
     /// to its last covered pixel; `None` where the row is empty.
     pub runs: Vec<Option<(usize, usize)>>,
-    /// The runs' pixels in row order: front depth, back depth, front
-    /// normal, back normal (as [`DepthMap::from_rows`] keeps them; zero
-    /// where a pixel inside a run is empty).
-    pub pixels: [Vec<[u8; 4]>; 4],
+    /// The runs' pixels in row order: clip depth of the nearest and the
+    /// farthest surface.
+    pub z: Vec<[f32; 2]>,
+    /// Their faces ([`NO_FACE`] where a pixel inside a run is empty).
+    pub face: Vec<[u32; 2]>,
 }
 
 /// Largest depth code: depth `z ∈ [0, 1]` is stored as `round(z (2²⁴ − 1))`.
@@ -186,81 +223,62 @@ impl DepthMap {
         height: u32,
         mut row: impl FnMut(usize) -> [&'a [[u8; 4]]; 4],
     ) -> Self {
-        let mut map = DepthMap {
-            view,
-            width,
-            height,
-            rows: Vec::with_capacity(height as usize),
-            front: Vec::new(),
-            back: Vec::new(),
-            front_normal: Vec::new(),
-            back_normal: Vec::new(),
-        };
+        let mut rows = Vec::with_capacity(height as usize);
+        let (mut front, mut back, mut front_normal, mut back_normal) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for y in 0..height as usize {
             let [f, b, fnm, bnm] = row(y);
             let covered = |x: &usize| f[*x][3] != 0 || b[*x][3] != 0;
             let w = (width as usize).min(f.len()).min(b.len()).min(fnm.len()).min(bnm.len());
-            let start = map.front.len() as u32;
+            let start = front.len() as u32;
             let Some(x0) = (0..w).find(covered) else {
-                map.rows.push([start, 0, 0]);
+                rows.push([start, 0, 0]);
                 continue;
             };
             let x1 = (x0..w).rfind(covered).map_or(x0, |x| x + 1);
-            map.front.extend_from_slice(&f[x0..x1]);
-            map.back.extend_from_slice(&b[x0..x1]);
-            map.front_normal.extend_from_slice(&fnm[x0..x1]);
-            map.back_normal.extend_from_slice(&bnm[x0..x1]);
-            map.rows.push([start, x0 as u32, x1 as u32]);
+            front.extend_from_slice(&f[x0..x1]);
+            back.extend_from_slice(&b[x0..x1]);
+            front_normal.extend_from_slice(&fnm[x0..x1]);
+            back_normal.extend_from_slice(&bnm[x0..x1]);
+            rows.push([start, x0 as u32, x1 as u32]);
         }
-        map
+        DepthMap { view, width, height, rows, pixels: Pixels::Encoded { front, back, front_normal, back_normal } }
     }
 
-    /// A map from a renderer that encodes the covered runs itself, in
-    /// [`BandRows`] of consecutive rows from the top. Rows beyond `height`
-    /// are ignored; missing rows are empty; a run is cut to `width` and to
-    /// the pixels given.
-    pub fn from_bands(view: View, width: u32, height: u32, bands: Vec<BandRows>) -> Self {
-        let stored: usize = bands.iter().map(|band| band.pixels[0].len()).sum();
-        let mut map = DepthMap {
-            view,
-            width,
-            height,
-            rows: Vec::with_capacity(height as usize),
-            front: Vec::with_capacity(stored),
-            back: Vec::with_capacity(stored),
-            front_normal: Vec::with_capacity(stored),
-            back_normal: Vec::with_capacity(stored),
-        };
-        for BandRows { runs, pixels: [f, b, fnm, bnm] } in bands {
-            let given = f.len().min(b.len()).min(fnm.len()).min(bnm.len());
+    /// A map from the CPU rasteriser's [`BandRows`] of consecutive rows
+    /// from the top and its faces' `normals`. Rows beyond `height` are
+    /// ignored; missing rows are empty; a run is cut to `width` and to the
+    /// pixels given.
+    pub fn from_bands(view: View, width: u32, height: u32, bands: Vec<BandRows>, normals: Vec<FaceNormal>) -> Self {
+        let stored: usize = bands.iter().map(|band| band.z.len().min(band.face.len())).sum();
+        let mut rows = Vec::with_capacity(height as usize);
+        let (mut z, mut face) = (Vec::with_capacity(stored), Vec::with_capacity(stored));
+        for BandRows { runs, z: bz, face: bf } in bands {
+            let given = bz.len().min(bf.len());
             // where the next run's pixels start in the band's arrays
             let mut next = 0usize;
             for run in runs {
-                if map.rows.len() == height as usize {
+                if rows.len() == height as usize {
                     break;
                 }
-                let start = map.front.len() as u32;
+                let start = z.len() as u32;
                 let Some((x0, x1)) = run.filter(|(x0, x1)| x0 < x1) else {
-                    map.rows.push([start, 0, 0]);
+                    rows.push([start, 0, 0]);
                     continue;
                 };
                 let len = x1 - x0;
                 let (x0c, x1c) = (x0.min(width as usize), x1.min(width as usize));
-                let at_c = next.min(given);
-                let keep = (x1c - x0c).min(given - at_c);
-                let at = at_c;
-                map.front.extend_from_slice(&f[at..at + keep]);
-                map.back.extend_from_slice(&b[at..at + keep]);
-                map.front_normal.extend_from_slice(&fnm[at..at + keep]);
-                map.back_normal.extend_from_slice(&bnm[at..at + keep]);
-                map.rows.push([start, x0c as u32, (x0c + keep) as u32]);
+                let at = next.min(given);
+                let keep = (x1c - x0c).min(given - at);
+                z.extend_from_slice(&bz[at..at + keep]);
+                face.extend_from_slice(&bf[at..at + keep]);
+                rows.push([start, x0c as u32, (x0c + keep) as u32]);
                 next += len;
             }
         }
-        while map.rows.len() < height as usize {
-            map.rows.push([map.front.len() as u32, 0, 0]);
+        while rows.len() < height as usize {
+            rows.push([z.len() as u32, 0, 0]);
         }
-        map
+        DepthMap { view, width, height, rows, pixels: Pixels::Faces { z, face, normals } }
     }
 
     /// Where pixel `i` (row-major image index) is stored; `None` where it
@@ -274,18 +292,41 @@ impl DepthMap {
 
     /// How many pixels are stored (those within the rows' runs).
     pub fn stored_pixels(&self) -> usize {
-        self.front.len()
+        match &self.pixels {
+            Pixels::Encoded { front, .. } => front.len(),
+            Pixels::Faces { z, .. } => z.len(),
+        }
+    }
+
+    /// Stored pixel `s` (image pixel `i`) of surface `k` (0 nearest, 1
+    /// farthest) as rendered: its depth pixel and its normal pixel
+    /// (RGBA8, module docs); `None` past the stored pixels.
+    fn encoded(&self, s: usize, i: usize, k: usize) -> Option<[[u8; 4]; 2]> {
+        match &self.pixels {
+            Pixels::Encoded { front, back, front_normal, back_normal } => {
+                let (depth, normal) = if k == 0 { (front, front_normal) } else { (back, back_normal) };
+                Some([*depth.get(s)?, *normal.get(s)?])
+            }
+            Pixels::Faces { z, face, normals } => {
+                let f = face.get(s)?[k];
+                let Some(n) = normals.get(f as usize) else { return Some([[0; 4]; 2]) };
+                let w = self.width as usize;
+                let (x, y) = ((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
+                let normal = (n[0] + n[1] * x + n[2] * y).normalize_or_zero();
+                Some([encode_depth_code(f64::from(z[s][k])), encode_normal(normal.to_array())])
+            }
+        }
     }
 
     /// The nearest surface at pixel `i` (world `p·d`, m); `None` where empty
     /// or outside the image.
     pub fn front_depth(&self, i: usize) -> Option<f64> {
-        decode_depth(&self.view, *self.front.get(self.stored(i)?)?)
+        decode_depth(&self.view, self.encoded(self.stored(i)?, i, 0)?[0])
     }
 
     /// The farthest surface at pixel `i`, as [`Self::front_depth`].
     pub fn back_depth(&self, i: usize) -> Option<f64> {
-        decode_depth(&self.view, *self.back.get(self.stored(i)?)?)
+        decode_depth(&self.view, self.encoded(self.stored(i)?, i, 1)?[0])
     }
 
     /// The pixel of a point, row 0 at the top of the image; `None` outside the image.
@@ -310,18 +351,19 @@ impl DepthMap {
     /// `back − margin ≤ p·d ≤ front + margin`.
     pub fn probe_with_margin(&self, p: DVec3, margin: f64) -> Probe {
         let outside = Probe { inside: false, escape: 0.0, normal: DVec3::ZERO };
-        let Some(s) = self.pixel(p).and_then(|i| self.stored(i)) else { return outside };
-        let depth = |px: &[[u8; 4]]| px.get(s).and_then(|&px| decode_depth(&self.view, px));
-        let (Some(f), Some(b)) = (depth(&self.front), depth(&self.back)) else { return outside };
+        let Some((i, s)) = self.pixel(p).and_then(|i| Some((i, self.stored(i)?))) else { return outside };
+        let (Some(front), Some(back)) = (self.encoded(s, i, 0), self.encoded(s, i, 1)) else { return outside };
+        let (Some(f), Some(b)) = (decode_depth(&self.view, front[0]), decode_depth(&self.view, back[0])) else {
+            return outside;
+        };
         let z = p.dot(self.view.d);
         if z < b - margin || z > f + margin {
             return outside;
         }
         let to_front = f + margin - z;
         let to_back = z - (b - margin);
-        let normals = if to_front <= to_back { &self.front_normal } else { &self.back_normal };
-        let (escape, n) = (to_front.min(to_back), normals.get(s).copied().unwrap_or_default());
-        Probe { inside: true, escape, normal: decode_normal(n).normalize_or_zero() }
+        let n = if to_front <= to_back { front[1] } else { back[1] };
+        Probe { inside: true, escape: to_front.min(to_back), normal: decode_normal(n).normalize_or_zero() }
     }
 }
 

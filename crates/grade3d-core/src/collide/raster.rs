@@ -29,8 +29,12 @@
 //! The image is cut into bands of 32 rows (`BAND_ROWS`); each triangle is
 //! binned into the bands its rows reach, and the bands are rasterised side
 //! by side on rayon's pool (the process's one thread budget), each in a
-//! scratch buffer that stays in cache, and encoded into the map's runs
-//! ([`DepthMap::from_bands`]).
+//! scratch buffer that stays in cache, and copied into the map's runs as
+//! depth and face per pixel ([`DepthMap::from_bands`]), with each face's
+//! normal as a function of the pixel centre: the map encodes a pixel's
+//! depth and normal when it is read, as the GPU path stores them (issue
+//! #15: encoding every covered pixel was half the rasteriser's time, and
+//! the collision reads a few thousand of them).
 //!
 //! Differences from a GPU, within the golden test's tolerances
 //! (`tests/collide.rs`): pixel centres exactly on an edge are covered by
@@ -51,7 +55,7 @@
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::depth::{encode_depth_code, encode_normal, BandRows, DepthMap, View};
+use super::depth::{BandRows, DepthMap, FaceNormal, View, NO_FACE};
 use super::{DepthRenderer, RenderOptions};
 use crate::geom::mesh::TriMesh;
 
@@ -149,17 +153,10 @@ impl Setup {
 /// and bands run side by side on rayon's pool).
 const BAND_ROWS: usize = 32;
 
-/// Face id of an empty pixel.
-const NO_FACE: u32 = u32::MAX;
-
-/// A triangle ready to scan: its setup, its vertex normals as a linear
-/// function of the pixel centre, and its pixel-centre bounds.
+/// A triangle ready to scan: its setup and its pixel-centre bounds.
 #[derive(Debug, Clone, Copy)]
 struct Scan {
     setup: Setup,
-    /// `n(x, y) = n₀ + n_x x + n_y y`, the vertex normals interpolated
-    /// (`Σ λ_k n_k`), not normalised.
-    normal: [glam::Vec3; 3],
     /// First and last pixel column whose centre is within its bounds.
     x: [usize; 2],
     /// First and last pixel row.
@@ -174,25 +171,36 @@ fn rasterise(mesh: &TriMesh, normals: &[DVec3], view: &View, n: u32) -> DepthMap
     // pixel centres i + ½ within [min, max]
     let first = |lo: f64| ((lo - 0.5).ceil().max(0.0)) as usize;
     let last = |hi: f64| (hi - 0.5).floor().min(nf - 1.0);
+    let setups: Vec<Option<Setup>> = mesh.triangles().iter().map(|t| Setup::new(t.map(|v| px[v.idx()]))).collect();
     let scans: Vec<Option<Scan>> = mesh
         .triangles()
         .iter()
-        .map(|t| {
+        .zip(&setups)
+        .map(|(t, setup)| {
             let [a, b, c] = t.map(|v| px[v.idx()]);
-            let setup = Setup::new([a, b, c])?;
+            let setup = (*setup)?;
             let (x_hi, y_hi) = (last(a.x.max(b.x).max(c.x)), last(a.y.max(b.y).max(c.y)));
             let (x0, y0) = (first(a.x.min(b.x).min(c.x)), first(a.y.min(b.y).min(c.y)));
             if x_hi < x0 as f64 || y_hi < y0 as f64 {
                 return None;
             }
-            // Σ λ_k n_k = n_c + λ_a (n_a − n_c) + λ_b (n_b − n_c), each λ linear in (x, y)
+            Some(Scan { setup, x: [x0, x_hi as usize], y: [y0, y_hi as usize] })
+        })
+        .collect();
+    // Σ λ_k n_k = n_c + λ_a (n_a − n_c) + λ_b (n_b − n_c), each λ linear in (x, y); read by the
+    // map when a pixel is (zero for a face that covers nothing)
+    let face_normals: Vec<FaceNormal> = mesh
+        .triangles()
+        .iter()
+        .zip(&scans)
+        .map(|(t, scan)| {
+            let Some(sc) = scan else { return [glam::Vec3::ZERO; 3] };
             let [na, nb, nc] = t.map(|v| normals[v.idx()]);
-            let [la, lb] = setup.lambda;
-            let normal = std::array::from_fn(|k| {
+            let [la, lb] = sc.setup.lambda;
+            std::array::from_fn(|k| {
                 let base = if k == 0 { nc } else { DVec3::ZERO };
                 (base + (na - nc) * la[k] + (nb - nc) * lb[k]).as_vec3()
-            });
-            Some(Scan { setup, normal, x: [x0, x_hi as usize], y: [y0, y_hi as usize] })
+            })
         })
         .collect();
     // the faces of each band, in face order (counting sort)
@@ -225,7 +233,7 @@ fn rasterise(mesh: &TriMesh, normals: &[DVec3], view: &View, n: u32) -> DepthMap
             },
         )
         .collect();
-    DepthMap::from_bands(*view, n, n, parts)
+    DepthMap::from_bands(*view, n, n, parts, face_normals)
 }
 
 /// Per pixel of a band while it is rasterised: the least and greatest clip
@@ -295,12 +303,6 @@ fn rasterise_band(
             }
         }
     }
-    let normal_at = |face: u32, x: usize, y: usize| -> [u8; 4] {
-        let Some(Some(sc)) = scans.get(face as usize) else { return [0; 4] };
-        let [n0, nx, ny] = sc.normal;
-        encode_normal((n0 + nx * (x as f32 + 0.5) + ny * (y as f32 + 0.5)).normalize_or_zero().to_array())
-    };
-    let depth = |z: f32| encode_depth_code(f64::from(z));
     let runs: Vec<Option<(usize, usize)>> = rows
         .clone()
         .map(|y| {
@@ -312,24 +314,16 @@ fn rasterise_band(
         })
         .collect();
     let stored: usize = runs.iter().flatten().map(|(x0, x1)| x1 - x0).sum();
-    let mut band = BandRows { runs, pixels: std::array::from_fn(|_| Vec::with_capacity(stored)) };
-    for (y, run) in rows.clone().zip(&band.runs) {
+    let (mut z, mut face) = (Vec::with_capacity(stored), Vec::with_capacity(stored));
+    for (y, run) in rows.clone().zip(&runs) {
         let row = (y - rows.start) * side;
         let Some((x0, x1)) = *run else { continue };
-        for x in x0..x1 {
-            let i = row + x;
-            let (ff, bf) = (s.front_face[i], s.back_face[i]);
-            let px = if ff == NO_FACE {
-                [[0; 4]; 4]
-            } else {
-                [depth(s.front_z[i]), depth(s.back_z[i]), normal_at(ff, x, y), normal_at(bf, x, y)]
-            };
-            for (out, p) in band.pixels.iter_mut().zip(px) {
-                out.push(p);
-            }
+        for i in row + x0..row + x1 {
+            z.push([s.front_z[i], s.back_z[i]]);
+            face.push([s.front_face[i], s.back_face[i]]);
         }
     }
-    band
+    BandRows { runs, z, face }
 }
 
 #[cfg(test)]
