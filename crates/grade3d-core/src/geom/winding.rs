@@ -173,6 +173,8 @@ struct Node {
     radius: f64,
     /// Sum of area vectors `n̄` (half cross products).
     area_vector: DVec3,
+    /// Sum of the triangles' areas `Σ_f A_f`.
+    area: f64,
     /// Second-order moment `C = Σ_f A_f (g_f − c̃) ⊗ n_f`.
     moment: DMat3,
     /// Third-order moments `D_i = Σ_f A_f n_f,i ∫_f (x − c̃)(x − c̃)ᵀ dA / A_f`,
@@ -477,6 +479,19 @@ impl Sym3 {
         Sym3([v.x * v.x, v.y * v.y, v.z * v.z, v.x * v.y, v.x * v.z, v.y * v.z])
     }
 
+    /// `u vᵀ + v uᵀ`.
+    #[inline]
+    fn sym_outer(u: DVec3, v: DVec3) -> Sym3 {
+        Sym3([
+            2.0 * u.x * v.x,
+            2.0 * u.y * v.y,
+            2.0 * u.z * v.z,
+            u.x * v.y + v.x * u.y,
+            u.x * v.z + v.x * u.z,
+            u.y * v.z + v.y * u.z,
+        ])
+    }
+
     #[inline]
     fn add_scaled(&mut self, k: f64, other: &Sym3) {
         for (a, b) in self.0.iter_mut().zip(other.0) {
@@ -515,6 +530,7 @@ fn placeholder() -> Node {
         centroid: DVec3::ZERO,
         radius: 0.0,
         area_vector: DVec3::ZERO,
+        area: 0.0,
         moment: DMat3::ZERO,
         moment3: [Sym3::ZERO; 3],
         start: 0,
@@ -533,10 +549,11 @@ struct Builder<'a> {
 
 impl Builder<'_> {
     /// Fills node `id` with the triangles `items[start..end]` (non-empty) and
-    /// builds its subtree.
+    /// builds its subtree: a leaf summed over its triangles, an internal node
+    /// from its children's sums ([`Builder::merge`]).
     fn build(&mut self, id: usize, start: usize, end: usize) {
-        let mut node = self.summarise(start, end);
         if end - start <= self.leaf_size {
+            let mut node = self.summarise(start, end);
             // zero-area triangles last, so the winding sums can skip them
             let mesh = self.mesh;
             self.items[start..end].sort_by_key(|it| (mesh.face_area_vector(FaceId(it.face)) == DVec3::ZERO, it.face));
@@ -567,11 +584,64 @@ impl Builder<'_> {
         let child = self.nodes.len();
         self.nodes.push(placeholder());
         self.nodes.push(placeholder());
+        self.build(child, start, mid);
+        self.build(child + 1, mid, end);
+        let mut node = self.merge(start, end, child);
         node.leaf = false;
         node.child_or_solid_end = child as u32;
         self.nodes[id] = node;
-        self.build(child, start, mid);
-        self.build(child + 1, mid, end);
+    }
+
+    /// An internal node over `items[start..end]` from its two children
+    /// (`child`, `child + 1`), each summed about its own centroid: areas,
+    /// area vectors and boxes add; the centroid is the area-weighted mean
+    /// of theirs; the moments are moved to it (issue #15: the build summed
+    /// every triangle's moments again at every level of the tree, a sixth
+    /// of a mannequin's obstacle). With `δ = c̃_child − c̃` and `C_i` the
+    /// child's column `i` of `C` (`Σ_f A_f n_f,i (g_f − c̃_child)`):
+    ///
+    /// `C ← C + δ ⊗ n̄`,
+    /// `D_i ← D_i + δ C_iᵀ + C_i δᵀ + n̄_i δ δᵀ`
+    ///
+    /// (from `∫_f (x − c̃)(x − c̃)ᵀ dA` with `x − c̃ = (x − c̃_child) + δ` and
+    /// `∫_f (x − c̃_child) dA = A_f (g_f − c̃_child)`). The bounding sphere's
+    /// radius is taken over the triangles' corners, as a leaf's.
+    fn merge(&self, start: usize, end: usize, child: usize) -> Node {
+        let (a, b) = (&self.nodes[child], &self.nodes[child + 1]);
+        let mut node = placeholder();
+        node.start = start as u32;
+        node.end = end as u32;
+        node.box_min = a.box_min.min(b.box_min);
+        node.box_max = a.box_max.max(b.box_max);
+        node.area = a.area + b.area;
+        node.area_vector = a.area_vector + b.area_vector;
+        // all-degenerate node: expand about the box centre (its terms are 0 anyway)
+        node.centroid = if node.area > 0.0 {
+            (a.area * a.centroid + b.area * b.centroid) / node.area
+        } else {
+            0.5 * (node.box_min + node.box_max)
+        };
+        for c in [a, b] {
+            let delta = c.centroid - node.centroid;
+            let n = c.area_vector;
+            node.moment += c.moment + DMat3::from_cols(delta * n.x, delta * n.y, delta * n.z);
+            let columns = [c.moment.x_axis, c.moment.y_axis, c.moment.z_axis];
+            for ((d, ci), (&child_d, ni)) in
+                node.moment3.iter_mut().zip(columns).zip(c.moment3.iter().zip(n.to_array()))
+            {
+                d.add_scaled(1.0, &child_d);
+                d.add_scaled(1.0, &Sym3::sym_outer(delta, ci));
+                d.add_scaled(ni, &Sym3::outer(delta));
+            }
+        }
+        let mut radius2: f64 = 0.0;
+        for it in &self.items[start..end] {
+            for q in self.mesh.corners(FaceId(it.face)) {
+                radius2 = radius2.max((q - node.centroid).length_squared());
+            }
+        }
+        node.radius = radius2.sqrt();
+        node
     }
 
     /// Box, area vector, area-weighted centroid, bounding sphere and
@@ -623,6 +693,7 @@ impl Builder<'_> {
         node.centroid = centroid;
         node.radius = radius2.sqrt();
         node.area_vector = area_vector;
+        node.area = area;
         node.moment = moment;
         node.moment3 = moment3;
         node
@@ -801,6 +872,53 @@ mod tests {
         assert_eq!(exact.face_count(), m.face_count());
         assert!(!exact.is_inside(DVec3::new(f64::NAN, 0.0, 0.0)));
         assert!(exact.winding_number(DVec3::new(f64::NAN, 0.0, 0.0)).is_nan());
+    }
+
+    /// Issue #15: an internal node's sums, made from its children's
+    /// (moments moved to its centroid), equal the sums over its triangles
+    /// (the leaf's formulas, [`Builder::summarise`]) on every node of a
+    /// sphere whose triangles are jittered off any symmetry.
+    #[test]
+    fn merged_moments_equal_the_sums_over_the_triangles() {
+        let mut m = icosphere(4, 1.0);
+        let mut rng = Rng(7);
+        let jittered: Vec<DVec3> = m
+            .positions()
+            .iter()
+            .map(|&p| p + 0.02 * rng.in_box(DVec3::splat(-1.0), DVec3::splat(1.0)) + DVec3::new(0.3, -0.2, 0.1))
+            .collect();
+        m = TriMesh::new(jittered, m.triangles().to_vec()).unwrap();
+        let tree = WindingTree::new(&m, &WindingOptions::default());
+        let mut items: Vec<BuildItem> = tree
+            .faces
+            .iter()
+            .map(|&f| {
+                let [a, b, c] = m.corners(f);
+                BuildItem { centroid: (a + b + c) / 3.0, face: f.0 }
+            })
+            .collect();
+        let builder = Builder { mesh: &m, items: &mut items, nodes: Vec::new(), leaf_size: 8 };
+        let close = |a: f64, b: f64, scale: f64| (a - b).abs() <= 1e-12 * scale;
+        let mut internal = 0;
+        for node in tree.nodes.iter().filter(|n| !n.leaf) {
+            internal += 1;
+            let direct = builder.summarise(node.start as usize, node.end as usize);
+            let scale = direct.area.max(1e-300);
+            assert!(close(node.area, direct.area, scale));
+            assert!((node.centroid - direct.centroid).length() < 1e-12);
+            assert!((node.area_vector - direct.area_vector).length() < 1e-12 * scale);
+            assert!((node.radius - direct.radius).abs() < 1e-12);
+            assert_eq!((node.box_min, node.box_max), (direct.box_min, direct.box_max));
+            for (x, y) in node.moment.to_cols_array().iter().zip(direct.moment.to_cols_array()) {
+                assert!(close(*x, y, scale), "C: {x} vs {y}");
+            }
+            for (dx, dy) in node.moment3.iter().zip(&direct.moment3) {
+                for (x, y) in dx.0.iter().zip(dy.0) {
+                    assert!(close(*x, y, scale), "D: {x} vs {y}");
+                }
+            }
+        }
+        assert!(internal > 100, "{internal} internal nodes");
     }
 
     #[test]
