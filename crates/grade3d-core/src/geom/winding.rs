@@ -29,7 +29,9 @@
 //! # Acceleration
 //!
 //! [`WindingTree`] is a binary bounding-volume hierarchy built by median
-//! split (of the triangle centroids) on the longest axis. Every node stores
+//! split (of the triangle centroids) on the longest axis; a leaf sums its
+//! triangles, an internal node its two children's sums, their moments
+//! moved to its own centroid (`Builder::merge`). Every node stores
 //! its bounding box, the sum of its triangles' area vectors
 //! `n̄ = Σ_f ½ (b_f − a_f) × (c_f − a_f) = Σ_f A_f n_f`, their area-weighted
 //! centroid `c̃ = Σ_f A_f g_f / Σ_f A_f` (`g_f` the centroid, `A_f` the area
