@@ -197,6 +197,9 @@ fn grade_offline(args: &GradeArgs) -> Result<(), Box<dyn std::error::Error>> {
     use grade3d::service::work::{self, BodyInput, WorkContext, WorkOptions};
     use grade3d::template::format::Template;
 
+    // the embedded body model decodes (about 45 ms, once per process) while the templates are read
+    // and the renderer starts; the flow's first use waits for it (and reports its error, if any)
+    std::thread::spawn(|| grade3d::mannequin::model::BodyModel::embedded().map(|_| ()));
     let bad = |m: String| -> Box<dyn std::error::Error> { Box::new(BadInput(m)) };
     let read = |p: &std::path::Path| std::fs::read(p).map_err(|e| bad(format!("{}: {e}", p.display())));
     let text = |p: &std::path::Path| -> Result<String, Box<dyn std::error::Error>> {
