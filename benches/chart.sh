@@ -11,6 +11,10 @@
 # reference body, grade3d-service's `blocks`) is made once per process,
 # and the service makes the live templates' blocks as it starts.
 #
+# Then the same 12-size charts as requests to a running `serve` (its start,
+# renderer, body model and template blocks behind it, as in production; the
+# result cache off and every request's chart distinct), wall per request.
+#
 # Then the 2D peer: FreeSewing (benches/peer/freesewing: @freesewing/core
 # with the titan trouser block and the bella bodice block) drafting and
 # rendering the same 12 sizes to SVG, timed in one Node process over RUNS
@@ -109,6 +113,58 @@ for name, args in cases:
         mb = f"{med(vb):.0f} ms" if vb else "-"
         ratio = f"{med(vh) / med(vb):.2f}" if vb and med(vb) > 0 else "-"
         print(f"  {stage:30} {mb:>28} {med(vh):>21.0f} ms {ratio:>9}")
+
+# the same 12-size runs as requests to a running service (`serve`, its start, renderer, body model and
+# blocks behind it, as in production): POST /v1/grade/size-chart with the result cache off, each request's
+# chart distinct (the base size's neck girth moved by a distinct thousandth of an inch, so every size's body,
+# fitted or graded from it, and its obstacle are new); wall time of each request as the client sees it
+import socket, urllib.request
+
+def free_port():
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]
+
+def service_walls(binary, templates):
+    port = free_port()
+    data = f"{out}/serve-data-{binary}"
+    shutil.rmtree(data, ignore_errors=True)
+    server = subprocess.Popen([f"{out}/{binary}", "serve", "--addr", f"127.0.0.1:{port}", "--data-dir", data,
+                               "--result-cache-bytes", "0"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    url = f"http://127.0.0.1:{port}"
+    try:
+        for _ in range(600):
+            try:
+                if urllib.request.urlopen(f"{url}/readyz", timeout=1).status == 200:
+                    break
+            except Exception:
+                time.sleep(0.1)
+        lines = open(chart).read().splitlines()
+        def request(k):
+            body = []
+            for line in lines:
+                cells = line.split(",")
+                if cells[0] == "8":
+                    cells[2] = f"{float(cells[2]) + 0.001 * k:.3f}"
+                body.append(",".join(cells))
+            req = urllib.request.Request(f"{url}/v1/grade/size-chart?templates={templates}&base_size=8",
+                                         data="\n".join(body).encode(), headers={"Content-Type": "text/csv"})
+            t = time.perf_counter()
+            with urllib.request.urlopen(req, timeout=120) as r:
+                r.read()
+            return time.perf_counter() - t
+        request(0)  # the first request after start (warms the pool; the blocks are made at start)
+        return [request(k + 1) for k in range(runs)]
+    finally:
+        server.terminate()
+        server.wait()
+
+print(f"\nThe same charts as requests to a running service (result cache off, a distinct chart each request), {runs} runs")
+print(f"{'case':32} {'base ' + base + ' (s) min/med/max':>28} {'this (s) min/med/max':>24} {'this/base':>9}")
+for name, templates in (("service 12 sizes: trousers", "trousers"), ("service 12 sizes: fitted-bodice", "fitted-bodice"),
+                        ("service 12 sizes: all three", "straight-skirt,trousers,fitted-bodice")):
+    wb, wh = service_walls("grade3d-base", templates), service_walls("grade3d-this", templates)
+    print(f"{name:32} {fmt(wb):>28} {fmt(wh):>24} {med(wh) / med(wb):>9.2f}")
 
 # the 2D peer
 if not os.path.isdir(f"{peer}/node_modules"):

@@ -298,22 +298,32 @@ impl DepthMap {
         }
     }
 
-    /// Stored pixel `s` (image pixel `i`) of surface `k` (0 nearest, 1
-    /// farthest) as rendered: its depth pixel and its normal pixel
-    /// (RGBA8, module docs); `None` past the stored pixels.
-    fn encoded(&self, s: usize, i: usize, k: usize) -> Option<[[u8; 4]; 2]> {
+    /// Stored pixel `s` of surface `k` (0 nearest, 1 farthest): its depth
+    /// pixel as rendered (RGBA8, module docs; A 0 where empty); `None` past
+    /// the stored pixels.
+    fn depth_pixel(&self, s: usize, k: usize) -> Option<[u8; 4]> {
         match &self.pixels {
-            Pixels::Encoded { front, back, front_normal, back_normal } => {
-                let (depth, normal) = if k == 0 { (front, front_normal) } else { (back, back_normal) };
-                Some([*depth.get(s)?, *normal.get(s)?])
-            }
+            Pixels::Encoded { front, back, .. } => (if k == 0 { front } else { back }).get(s).copied(),
             Pixels::Faces { z, face, normals } => {
-                let f = face.get(s)?[k];
-                let Some(n) = normals.get(f as usize) else { return Some([[0; 4]; 2]) };
+                let covered = (face.get(s)?[k] as usize) < normals.len();
+                Some(if covered { encode_depth_code(f64::from(z[s][k])) } else { [0; 4] })
+            }
+        }
+    }
+
+    /// Stored pixel `s` (image pixel `i`) of surface `k`: its normal pixel
+    /// as rendered (the face's normal at the pixel centre, normalised and
+    /// encoded, for a rasterised map); `None` past the stored pixels.
+    fn normal_pixel(&self, s: usize, i: usize, k: usize) -> Option<[u8; 4]> {
+        match &self.pixels {
+            Pixels::Encoded { front_normal, back_normal, .. } => {
+                (if k == 0 { front_normal } else { back_normal }).get(s).copied()
+            }
+            Pixels::Faces { face, normals, .. } => {
+                let Some(n) = normals.get(face.get(s)?[k] as usize) else { return Some([0; 4]) };
                 let w = self.width as usize;
                 let (x, y) = ((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
-                let normal = (n[0] + n[1] * x + n[2] * y).normalize_or_zero();
-                Some([encode_depth_code(f64::from(z[s][k])), encode_normal(normal.to_array())])
+                Some(encode_normal((n[0] + n[1] * x + n[2] * y).normalize_or_zero().to_array()))
             }
         }
     }
@@ -321,12 +331,12 @@ impl DepthMap {
     /// The nearest surface at pixel `i` (world `p·d`, m); `None` where empty
     /// or outside the image.
     pub fn front_depth(&self, i: usize) -> Option<f64> {
-        decode_depth(&self.view, self.encoded(self.stored(i)?, i, 0)?[0])
+        decode_depth(&self.view, self.depth_pixel(self.stored(i)?, 0)?)
     }
 
     /// The farthest surface at pixel `i`, as [`Self::front_depth`].
     pub fn back_depth(&self, i: usize) -> Option<f64> {
-        decode_depth(&self.view, self.encoded(self.stored(i)?, i, 1)?[0])
+        decode_depth(&self.view, self.depth_pixel(self.stored(i)?, 1)?)
     }
 
     /// The pixel of a point, row 0 at the top of the image; `None` outside the image.
@@ -352,17 +362,16 @@ impl DepthMap {
     pub fn probe_with_margin(&self, p: DVec3, margin: f64) -> Probe {
         let outside = Probe { inside: false, escape: 0.0, normal: DVec3::ZERO };
         let Some((i, s)) = self.pixel(p).and_then(|i| Some((i, self.stored(i)?))) else { return outside };
-        let (Some(front), Some(back)) = (self.encoded(s, i, 0), self.encoded(s, i, 1)) else { return outside };
-        let (Some(f), Some(b)) = (decode_depth(&self.view, front[0]), decode_depth(&self.view, back[0])) else {
-            return outside;
-        };
+        let depth = |k: usize| self.depth_pixel(s, k).and_then(|px| decode_depth(&self.view, px));
+        let (Some(f), Some(b)) = (depth(0), depth(1)) else { return outside };
         let z = p.dot(self.view.d);
         if z < b - margin || z > f + margin {
             return outside;
         }
         let to_front = f + margin - z;
         let to_back = z - (b - margin);
-        let n = if to_front <= to_back { front[1] } else { back[1] };
+        // the normal of the nearer surface, read only for a point inside
+        let n = self.normal_pixel(s, i, usize::from(to_front > to_back)).unwrap_or_default();
         Probe { inside: true, escape: to_front.min(to_back), normal: decode_normal(n).normalize_or_zero() }
     }
 }
