@@ -341,7 +341,9 @@ pub enum DartSource<'a> {
     /// where it holds on this body — every dart opens by at least
     /// [`PatternOptions::min_dart_intake_mm`] with legs that do not cross,
     /// no piece folds, no sew or cut line crosses itself, no line is left
-    /// unclean — else decided here as by [`DartSource::Decide`]. Mirror
+    /// unclean, and no piece the block gives no dart strains past
+    /// [`AutoDartOptions::target_strain_p95`] (it wants darts the block
+    /// lacks) — else decided here as by [`DartSource::Decide`]. Mirror
     /// pairs are paired on this body either way (a scan's halves differ).
     Block(&'a DartPlan),
 }
@@ -398,7 +400,15 @@ fn block_holds(g: &GarmentPattern, checks: &[DartCheck], opts: &PatternOptions) 
         .reports
         .iter()
         .all(|r| r.distortion.flipped == 0 && !r.sew_line_self_intersects && !r.cut_line_self_intersects);
-    opens && unfolded && g.pieces.iter().all(|p| super::lines::line_problems(p).is_empty())
+    // a piece the block gave no dart (its reference body's piece needed none) that strains here
+    // past the search's target wants darts the block lacks (a fitted bodice's back on a fuller
+    // back: 3.0 % p95 with its own darts, 5.9 % with none)
+    let dartless_fit = g.reports.iter().all(|r| {
+        !r.found_darts.is_empty()
+            || !opts.auto_darts.enabled
+            || r.distortion.strain_p95 <= opts.auto_darts.target_strain_p95
+    });
+    opens && unfolded && dartless_fit && g.pieces.iter().all(|p| super::lines::line_problems(p).is_empty())
 }
 
 /// The pieces of every template mirror pair: cut as one (the first panel's
