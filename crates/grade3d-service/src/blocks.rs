@@ -6,9 +6,10 @@
 //! the style's block altered to the customer, with its darts where the
 //! block has them, each opening by what this body needs; only where the
 //! block's darts do not hold on a body (a dart that does not open, a piece
-//! that folds) is the pattern decided on the body itself. The darts of a
-//! style are then the same on every customer, as they are on every size
-//! of a chart run — and a scan's pattern is not held up by the dart
+//! that folds, a piece the block gives no dart that strains past the dart
+//! search's target) is the pattern decided on the body itself. The darts
+//! of a style are then the same on every customer, as they are on every
+//! size of a chart run — and a scan's pattern is not held up by the dart
 //! search (two rounds of 24 trial flattenings per piece on a trouser
 //! scan: about 80 of its 125 ms of pattern).
 //!
