@@ -549,10 +549,7 @@ fn a_block_is_carried_where_it_holds_and_decided_where_not() {
     assert_eq!(fell_back.pattern.dart_plan, decided.pattern.dart_plan);
     // the block made on the reference body holds here: carried, every dart opening
     let reference = reference_body().unwrap();
-    let block = grade_with_darts(&t, &reference, Some(&obstacle_of(&reference.mesh)), "block", &go, DartSource::Decide)
-        .unwrap()
-        .pattern
-        .dart_plan;
+    let block = grade3d::pipeline::block(&t, &reference, Some(&obstacle_of(&reference.mesh)), &go).unwrap();
     let carried = grade(DartSource::Block(&block));
     assert_eq!(carried.pattern.dart_plan.found, block.found, "the block held");
     let least = PatternOptions::default().min_dart_intake_mm;

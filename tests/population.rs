@@ -49,7 +49,7 @@ use grade3d::mannequin::model::BodyModel;
 use grade3d::mannequin::population::{sample_population, scan_like};
 use grade3d::pattern::garment::{DartPlan, DartSource};
 use grade3d::pattern::lines;
-use grade3d::pipeline::{grade, grade_with_darts, GradeOptions};
+use grade3d::pipeline::{block, grade_with_darts, GradeOptions};
 use grade3d::template::library::{builtin, reference_body};
 
 /// The population's seed (any fixed value; this one is the number).
@@ -123,8 +123,7 @@ fn run(range: std::ops::Range<usize>) {
     };
     let blocks: Vec<DartPlan> = library
         .iter()
-        .map(|t| grade(t, &reference, Some(&reference_obstacle), "block", &GradeOptions::default()).unwrap())
-        .map(|g| g.pattern.dart_plan)
+        .map(|t| block(t, &reference, Some(&reference_obstacle), &GradeOptions::default()).unwrap())
         .collect();
     // grades whose found darts are their block's (the block held, or there was none to carry)
     let mut block_held = 0usize;

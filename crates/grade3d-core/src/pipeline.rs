@@ -251,6 +251,24 @@ pub fn grade_with_plan(
     grade_with_darts(t, body, obstacle, size, opts, DartSource::from(plan))
 }
 
+/// Size label of a template's block grade ([`block`]).
+pub const BLOCK_SIZE: &str = "block";
+
+/// A template's *block* (issue #15, [`DartSource::Block`]): its dart plan
+/// on `reference`, the body it is authored on
+/// ([`crate::template::library::reference_body`]), its darts decided there.
+///
+/// # Errors
+/// [`PipelineError`] of that grade.
+pub fn block(
+    t: &Template,
+    reference: &FeatureBody,
+    obstacle: Option<&Obstacle>,
+    opts: &GradeOptions,
+) -> Result<DartPlan, PipelineError> {
+    Ok(grade_with_darts(t, reference, obstacle, BLOCK_SIZE, opts, DartSource::Decide)?.pattern.dart_plan)
+}
+
 /// [`grade`], the pattern's darts from `darts` ([`DartSource`]: decided on
 /// this body, a run's plan, or the template's block).
 ///

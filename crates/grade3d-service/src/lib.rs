@@ -263,17 +263,10 @@ impl AppState {
             let _ = me.0.renderer.set(renderer);
             // the live templates' blocks, made now rather than by their first scan (a scan that
             // comes first waits for the same build)
-            let templates: Vec<Template> = match me.0.store.list() {
-                Ok(entries) => entries
-                    .iter()
-                    .filter_map(|e| me.0.store.get_json(&e.name, None).ok())
-                    .filter_map(|(_, json)| Template::from_json(&json).ok())
-                    .collect(),
-                Err(e) => {
-                    tracing::warn!(error = %e, "no blocks made at start: the template store could not be listed");
-                    Vec::new()
-                }
-            };
+            let templates: Vec<Template> = me.0.store.live().unwrap_or_else(|e| {
+                tracing::warn!(error = %e, "no blocks made at start: the live templates could not be read");
+                Vec::new()
+            });
             if let Ok(ctx) = me.work_context() {
                 let start = std::time::Instant::now();
                 let made = ctx.blocks(&templates).iter().filter(|b| b.is_some()).count();
@@ -577,14 +570,7 @@ fn resolve_templates_now(s: &AppState, names: &[String], field: &str) -> Result<
     ))]
 async fn get_vocabulary(State(s): State<AppState>, headers: HeaderMap) -> Result<Json<api::Vocabulary>, Problem> {
     check_key(&s, &headers, false)?;
-    let templates = off_executor(move || {
-        let mut out = Vec::new();
-        for e in s.0.store.list()? {
-            out.push(s.0.store.get(&e.name, None)?.1);
-        }
-        Ok(out)
-    })
-    .await?;
+    let templates = off_executor(move || Ok(s.0.store.live()?)).await?;
     Ok(Json(vocabulary(&templates)))
 }
 

@@ -122,6 +122,15 @@ impl TemplateStore {
             .collect()
     }
 
+    /// Every live template, parsed, in name order.
+    ///
+    /// # Errors
+    /// [`StoreError::Database`]; [`StoreError::Invalid`] for a stored
+    /// document that no longer parses.
+    pub fn live(&self) -> Result<Vec<Template>, StoreError> {
+        self.list()?.iter().map(|e| self.get(&e.name, None).map(|(_, t)| t)).collect()
+    }
+
     /// A template (the live version, or `version`) as stored JSON.
     ///
     /// # Errors

@@ -327,9 +327,8 @@ impl WorkContext {
             .as_ref()
             .map_err(|e| format!("the reference body: {e}"))?;
         let obstacle = self.obstacle(&body.mesh, true, &mut Timer(BTreeMap::new())).map_err(|e| e.to_string())?;
-        let g = grade_with_darts(t, body, obstacle.as_deref(), "block", &self.opts.grade, DartSource::Decide)
-            .map_err(|e| format!("graded on the reference body: {e}"))?;
-        Ok(g.pattern.dart_plan)
+        crate::pipeline::block(t, body, obstacle.as_deref(), &self.opts.grade)
+            .map_err(|e| format!("graded on the reference body: {e}"))
     }
 }
 

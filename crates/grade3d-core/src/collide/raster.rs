@@ -171,14 +171,12 @@ fn rasterise(mesh: &TriMesh, normals: &[DVec3], view: &View, n: u32) -> DepthMap
     // pixel centres i + ½ within [min, max]
     let first = |lo: f64| ((lo - 0.5).ceil().max(0.0)) as usize;
     let last = |hi: f64| (hi - 0.5).floor().min(nf - 1.0);
-    let setups: Vec<Option<Setup>> = mesh.triangles().iter().map(|t| Setup::new(t.map(|v| px[v.idx()]))).collect();
     let scans: Vec<Option<Scan>> = mesh
         .triangles()
         .iter()
-        .zip(&setups)
-        .map(|(t, setup)| {
+        .map(|t| {
             let [a, b, c] = t.map(|v| px[v.idx()]);
-            let setup = (*setup)?;
+            let setup = Setup::new([a, b, c])?;
             let (x_hi, y_hi) = (last(a.x.max(b.x).max(c.x)), last(a.y.max(b.y).max(c.y)));
             let (x0, y0) = (first(a.x.min(b.x).min(c.x)), first(a.y.min(b.y).min(c.y)));
             if x_hi < x0 as f64 || y_hi < y0 as f64 {

@@ -625,9 +625,9 @@ fn solve_scales(
 ) -> Result<Solved, FitError> {
     let ids: Vec<MeasurementId> = targets.keys().copied().collect();
     let Solved { mut body, mut measured, mut rounds } = start;
-    // the current scales' reading, and their positions while that reading is the quick one
+    // the current scales' reading, and their body while that reading is the quick one
     let mut reading = measured.clone();
-    let mut unread: Option<Vec<DVec3>> = None;
+    let mut unread: Option<TriMesh> = None;
     loop {
         let worst = targets
             .iter()
@@ -637,8 +637,8 @@ fn solve_scales(
         if (worst < opts.girth_tolerance_mm && stepped) || rounds >= opts.scaling_iterations {
             match unread.take() {
                 None => break,
-                Some(positions) => {
-                    (body, measured) = remeasure(model, positions, opts)?;
+                Some(mesh) => {
+                    (body, measured) = remeasure(model, mesh, opts)?;
                     reading = measured.clone();
                     continue;
                 }
@@ -650,18 +650,13 @@ fn solve_scales(
         let mesh = TriMesh::new(positions, model.triangles().to_vec()).map_err(MannequinError::from)?;
         let quick = quick_measure(model, &mesh, &ids, opts)?;
         reading = ids.iter().zip(quick).map(|(&id, q)| (id, q + offset.get(&id).copied().unwrap_or(0.0))).collect();
-        unread = Some(mesh.positions().to_vec());
+        unread = Some(mesh);
     }
     Ok(Solved { body, measured, rounds })
 }
 
-/// The feature body and measurements of hm08 `positions` (a scaled body).
-fn remeasure(
-    model: &BodyModel,
-    positions: Vec<DVec3>,
-    opts: &FitOptions,
-) -> Result<(FeatureBody, Measurements), FitError> {
-    let mesh = TriMesh::new(positions, model.triangles().to_vec()).map_err(MannequinError::from)?;
+/// The feature body and measurements of an hm08 `mesh` (a scaled body).
+fn remeasure(model: &BodyModel, mesh: TriMesh, opts: &FitOptions) -> Result<(FeatureBody, Measurements), FitError> {
     let lm = hm08_landmarks(model, &mesh, &opts.landmarks)?;
     let body = derive_features(mesh, &lm, &opts.derive)?;
     let measured = measure(&body, &opts.measure);

@@ -373,15 +373,15 @@ pub fn pattern_with_darts(
     source: DartSource<'_>,
 ) -> Result<GarmentPattern, PatternError> {
     let (mut g, decided) = match source {
-        DartSource::Decide => (pattern_darts(t, positions, triangles, lineage, size, opts, None)?, None),
+        DartSource::Decide => (pattern_darts(t, positions, triangles, lineage, size, opts)?, None),
         DartSource::Run(plan) => {
-            (pattern_darts(t, positions, triangles, lineage, size, opts, Some(plan))?, Some(plan.cut_pairs.as_slice()))
+            (carry_plan(t, positions, triangles, lineage, size, opts, plan)?.0, Some(plan.cut_pairs.as_slice()))
         }
         DartSource::Block(plan) => {
             let carried = carry_plan(t, positions, triangles, lineage, size, opts, plan).ok();
             let g = match carried.filter(|(g, checks)| block_holds(g, checks, opts)) {
                 Some((g, _)) => g,
-                None => pattern_darts(t, positions, triangles, lineage, size, opts, None)?,
+                None => pattern_darts(t, positions, triangles, lineage, size, opts)?,
             };
             (g, None)
         }
@@ -459,7 +459,9 @@ fn pair_name(a: &str, b: &str) -> String {
     }
 }
 
-/// [`pattern_with_plan`] before the mirror pairs are paired: the darts.
+/// [`pattern_with_darts`] before the mirror pairs are paired, its darts
+/// decided on this mesh ([`DartSource::Decide`]; a plan is carried by
+/// [`carry_plan`]).
 fn pattern_darts(
     t: &Template,
     positions: &TiSlice<VertexId, DVec3>,
@@ -467,11 +469,7 @@ fn pattern_darts(
     lineage: &Lineage,
     size: &str,
     opts: &PatternOptions,
-    plan: Option<&DartPlan>,
 ) -> Result<GarmentPattern, PatternError> {
-    if let Some(plan) = plan {
-        return Ok(carry_plan(t, positions, triangles, lineage, size, opts, plan)?.0);
-    }
     // cut once: each pass below slits its darts into copies of these panels
     let plain = cut_plain(t, positions, triangles, lineage)?;
     let mut tt = t.clone();
