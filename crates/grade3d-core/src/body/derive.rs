@@ -43,6 +43,7 @@
 use std::collections::BTreeMap;
 
 use glam::DVec3;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::contact::{thigh_contact, ContactOptions};
@@ -425,13 +426,18 @@ pub fn derive_features(
     check_heights(&snapped)?;
     check_pairs(&snapped, opts)?;
 
+    // the curves are independent sections and paths: derived side by side on rayon's pool
+    // (issue #15), the first failure in vocabulary order reported, as one after another would
+    let derived: Vec<Result<FeatureCurve, FeatureError>> = vocab::CURVES
+        .par_iter()
+        .map(|def| match landmarks.curves.get(&def.id) {
+            Some(given) => given_curve(def.id, given),
+            None => curve_by_rule(&mesh, def.id, &def.rule, &snapped, opts),
+        })
+        .collect();
     let mut curves = BTreeMap::new();
-    for def in vocab::CURVES {
-        let curve = match landmarks.curves.get(&def.id) {
-            Some(given) => given_curve(def.id, given)?,
-            None => curve_by_rule(&mesh, def.id, &def.rule, &snapped, opts)?,
-        };
-        curves.insert(def.id, curve);
+    for (def, curve) in vocab::CURVES.iter().zip(derived) {
+        curves.insert(def.id, curve?);
     }
     check_limb_sides(&curves, &snapped, opts)?;
     check_girths(&curves, stature, opts)?;

@@ -286,9 +286,10 @@ fn quick_measure(
     opts: &FitOptions,
 ) -> Result<Vec<f64>, FitError> {
     let lm = hm08_landmarks(model, mesh, &opts.landmarks)?;
-    let mut out = Vec::with_capacity(ids.len());
-    for &id in ids {
-        let v = if id == MeasurementId::Stature {
+    // the measurements are independent sections: read side by side on rayon's pool (issue #15),
+    // the first failure in `ids`' order reported
+    let read = |id: MeasurementId| -> Result<f64, FitError> {
+        Ok(if id == MeasurementId::Stature {
             mesh.aabb().size().y
         } else if id == MeasurementId::ShoulderGirth {
             let level = |p: PointId| lm.points[&p] - DVec3::Y * (opts.derive.chest_below_armpit_mm / MM_PER_M);
@@ -307,10 +308,9 @@ fn quick_measure(
             // lengths and heights: full derivation
             let body = derive_features(mesh.clone(), &lm, &opts.derive)?;
             measure(&body, &opts.measure).get(&id).copied().unwrap_or(f64::NAN)
-        };
-        out.push(v);
-    }
-    Ok(out)
+        })
+    };
+    ids.par_iter().map(|&id| read(id)).collect::<Vec<_>>().into_iter().collect()
 }
 
 /// Solves the small dense system `a x = b` (row-major `a`, `n × n`) by LU
