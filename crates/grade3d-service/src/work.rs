@@ -473,7 +473,9 @@ type Done<R> = (Vec<(String, Graded, FitReport)>, R, Vec<Artefact>);
 /// `plans[i]`, where given, is template `i`'s dart plan from the run's base
 /// size (unless [`crate::pattern::garment::PatternOptions::search_every_size`]);
 /// without plans, `blocks[i]`, where given, is template `i`'s block
-/// ([`crate::blocks`]), else its darts are decided on this body.
+/// ([`crate::blocks`]), else its darts are decided on this body. With
+/// [`Patterns::Later`] the pattern artefacts are left to [`write_patterns`]
+/// (a size chart's, once its nests are trued).
 #[expect(clippy::too_many_arguments, reason = "one body of a run: its inputs, the run's plans, timer and artefacts")]
 fn grade_body(
     ctx: &WorkContext,
@@ -483,6 +485,7 @@ fn grade_body(
     size: &str,
     plans: Option<&[DartPlan]>,
     blocks: &[Option<Arc<DartPlan>>],
+    patterns: Patterns,
     timer: &mut Timer,
     out: &mut Vec<Artefact>,
 ) -> Result<Vec<(String, Graded, FitReport)>, WorkError> {
@@ -502,13 +505,27 @@ fn grade_body(
         timer.add_ms(stage::PATTERN, g.timings.pattern_ms);
         let start = Instant::now();
         let stem = format!("{}-{}", t.name, size);
-        out.extend(pattern_artefacts(&t.name, size, &g)?);
+        if patterns == Patterns::Now {
+            out.extend(pattern_artefacts(&t.name, size, &g)?);
+        }
         let (glb, fit) = garment_glb(t, &g, body, obstacle)?;
         out.push(Artefact { name: format!("{stem}.garment.glb"), media_type: "model/gltf-binary", bytes: glb });
         timer.add(stage::EXPORT, start);
         graded.push((t.name.clone(), g, fit));
     }
     Ok(graded)
+}
+
+/// When [`grade_body`] writes a body's pattern artefacts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Patterns {
+    /// With the rest of the body's artefacts.
+    Now,
+    /// Not at all: [`write_patterns`] writes them later, each template's
+    /// before its garment GLB (a size chart's, once its nests are trued:
+    /// issue #15, a size's patterns were written twice, the second time
+    /// one size after another).
+    Later,
 }
 
 /// The pattern of one template on one size: SVG, DXF (AAMA and AccuMark) and JSON.
@@ -544,35 +561,46 @@ fn pattern_artefacts(template: &str, size: &str, g: &Graded) -> Result<Vec<Artef
 type GradedRow = (String, Vec<(String, Graded, FitReport)>, Vec<Artefact>);
 
 /// Trues every template's nest over the graded rows (chart order, `base`
-/// their base row) and writes the per-size pattern artefacts of the pieces
-/// it moved again; per template, what it did.
+/// their base row), the pieces it moved replaced in the rows' grades; per
+/// template, what it did.
 fn true_rows(
     templates: &[Template],
     rows: &mut [GradedRow],
     base: usize,
     opts: &TrueOptions,
-) -> Result<Vec<(String, TrueReport)>, WorkError> {
+) -> Vec<(String, TrueReport)> {
     let mut reports = Vec::with_capacity(templates.len());
     for (ti, t) in templates.iter().enumerate() {
         let mut sizes: Vec<(String, Vec<PatternPiece>)> =
             rows.iter().map(|(size, graded, _)| (size.clone(), graded[ti].1.pattern.pieces.clone())).collect();
         let report = true_nest(&mut sizes, base, opts);
-        for ((size, graded, out), (_, pieces)) in rows.iter_mut().zip(sizes) {
-            if !report.moved.iter().any(|m| m.size == *size) {
-                continue;
-            }
-            let g = &mut graded[ti].1;
-            g.pattern.pieces = pieces;
-            let fresh = pattern_artefacts(&t.name, size, g)?;
-            for a in fresh {
-                if let Some(old) = out.iter_mut().find(|o| o.name == a.name) {
-                    *old = a;
-                }
+        for ((size, graded, _), (_, pieces)) in rows.iter_mut().zip(sizes) {
+            if report.moved.iter().any(|m| m.size == *size) {
+                graded[ti].1.pattern.pieces = pieces;
             }
         }
         reports.push((t.name.clone(), report));
     }
-    Ok(reports)
+    reports
+}
+
+/// Every row's pattern artefacts ([`Patterns::Later`]), each template's
+/// before its garment GLB; the rows side by side on rayon's pool. The first
+/// failure in row order is returned.
+fn write_patterns(rows: &mut [GradedRow]) -> Result<(), WorkError> {
+    use rayon::prelude::*;
+    let written: Vec<Result<(), WorkError>> = rows
+        .par_iter_mut()
+        .map(|(size, graded, out)| {
+            for (template, g, _) in graded.iter() {
+                let glb = format!("{template}-{size}.garment.glb");
+                let at = out.iter().position(|a| a.name == glb).unwrap_or(out.len());
+                out.splice(at..at, pattern_artefacts(template, size, g)?);
+            }
+            Ok(())
+        })
+        .collect();
+    written.into_iter().collect()
 }
 
 /// The garment as GLB with the ease (distance to the body, mm) as a vertex
@@ -602,44 +630,49 @@ fn gerber() -> dxf::DxfOptions {
     dxf::DxfOptions { profile: dxf::DxfProfile::GerberAccuMark, ..Default::default() }
 }
 
-/// Nests, grade rules and their exports of one template over sizes.
+/// Nests, grade rules and their exports of one template over sizes (each
+/// written side by side on rayon's pool: issue #15, they were the run's
+/// serial tail).
 fn graded_nest(
     template: &str,
     sizes: &[(String, Vec<PatternPiece>)],
     base: &str,
     created: Option<Created>,
-    out: &mut Vec<Artefact>,
-) -> Result<(), WorkError> {
+) -> Result<Vec<Artefact>, WorkError> {
     let nest_err = |source| WorkError::Nest { template: template.to_owned(), source };
-    let nested = nests(sizes).map_err(nest_err)?;
-    let rules = grade_rules(template, sizes, base).map_err(nest_err)?;
-    out.push(Artefact {
-        name: format!("{template}.nest.svg"),
-        media_type: "image/svg+xml",
-        bytes: svg::nest_svg(template, &nested, &Default::default()).into_bytes(),
-    });
-    out.push(Artefact {
-        name: format!("{template}.nest.dxf"),
-        media_type: "image/vnd.dxf",
-        bytes: dxf::nest_dxf_with_rules(template, &nested, &rules, &Default::default())?,
-    });
-    out.push(Artefact {
-        name: format!("{template}.nest.accumark.dxf"),
-        media_type: "image/vnd.dxf",
-        bytes: dxf::nest_dxf_with_rules(template, &nested, &rules, &gerber())?,
-    });
-    out.push(Artefact {
-        name: format!("{template}.rules.csv"),
-        media_type: "text/csv",
-        bytes: rul::rules_table_csv(&rules)?.into_bytes(),
-    });
-    out.push(Artefact {
-        // named after the nest DXF whose `# n` texts it numbers, as CAD systems pair them
-        name: format!("{template}.nest.rul"),
-        media_type: "text/plain",
-        bytes: rul::rules_rul_with(&rules, &rul::RulOptions { created, ..Default::default() }).into_bytes(),
-    });
-    Ok(())
+    let (nested, rules) = rayon::join(|| nests(sizes), || grade_rules(template, sizes, base));
+    let (nested, rules) = (nested.map_err(nest_err)?, rules.map_err(nest_err)?);
+    let ((svg, (dxf, accumark)), (csv, rul)) = rayon::join(
+        || {
+            rayon::join(
+                || svg::nest_svg(template, &nested, &Default::default()).into_bytes(),
+                || {
+                    rayon::join(
+                        || dxf::nest_dxf_with_rules(template, &nested, &rules, &Default::default()),
+                        || dxf::nest_dxf_with_rules(template, &nested, &rules, &gerber()),
+                    )
+                },
+            )
+        },
+        || {
+            rayon::join(
+                || rul::rules_table_csv(&rules),
+                || rul::rules_rul_with(&rules, &rul::RulOptions { created, ..Default::default() }).into_bytes(),
+            )
+        },
+    );
+    Ok(vec![
+        Artefact { name: format!("{template}.nest.svg"), media_type: "image/svg+xml", bytes: svg },
+        Artefact { name: format!("{template}.nest.dxf"), media_type: "image/vnd.dxf", bytes: dxf? },
+        Artefact { name: format!("{template}.nest.accumark.dxf"), media_type: "image/vnd.dxf", bytes: accumark? },
+        Artefact { name: format!("{template}.rules.csv"), media_type: "text/csv", bytes: csv?.into_bytes() },
+        Artefact {
+            // named after the nest DXF whose `# n` texts it numbers, as CAD systems pair them
+            name: format!("{template}.nest.rul"),
+            media_type: "text/plain",
+            bytes: rul,
+        },
+    ])
 }
 
 /// The garment reports of one body; each template's pieces join its sizes.
@@ -667,9 +700,12 @@ fn graded_nests(
     timer: &mut Timer,
     out: &mut Vec<Artefact>,
 ) -> Result<(), WorkError> {
+    use rayon::prelude::*;
     let start = Instant::now();
-    for (t, sizes) in templates.iter().zip(per_template) {
-        graded_nest(&t.name, sizes, base, created, out)?;
+    let written: Vec<Result<Vec<Artefact>, WorkError>> =
+        templates.par_iter().zip(per_template).map(|(t, sizes)| graded_nest(&t.name, sizes, base, created)).collect();
+    for w in written {
+        out.extend(w?);
     }
     timer.add(stage::EXPORT, start);
     Ok(())
@@ -739,8 +775,18 @@ pub fn size_chart(
         let row = &chart.rows[i];
         progress(stage::REFINE, done, total);
         let mut out = Vec::new();
-        let graded =
-            grade_body(ctx, templates, &fitted.body, obstacle.as_deref(), &row.size, plans, &[], timer, &mut out)?;
+        let graded = grade_body(
+            ctx,
+            templates,
+            &fitted.body,
+            obstacle.as_deref(),
+            &row.size,
+            plans,
+            &[],
+            Patterns::Later,
+            timer,
+            &mut out,
+        )?;
         let mannequin = MannequinReport {
             residuals: fitted.residuals.iter().map(|(id, r)| (id.as_str().to_owned(), r.into())).collect(),
             warnings: fitted.body.warnings.clone(),
@@ -769,7 +815,8 @@ pub fn size_chart(
     // the nests trued outwards from the base size before anything of them is written
     let start = Instant::now();
     let base_index = rows.iter().position(|r| r.0 == base).unwrap_or(0);
-    let truing = true_rows(templates, &mut rows, base_index, &ctx.opts.true_nest)?;
+    let truing = true_rows(templates, &mut rows, base_index, &ctx.opts.true_nest);
+    write_patterns(&mut rows)?;
     timer.add(stage::EXPORT, start);
     for ((size, graded, out), mannequin) in rows.into_iter().zip(mannequins) {
         artefacts.extend(out);
@@ -833,8 +880,18 @@ pub fn bodies(
         let input = &inputs[i];
         progress(stage::REFINE, done, total);
         let mut out = Vec::new();
-        let graded =
-            grade_body(ctx, templates, body, obstacle.as_deref(), input.name, plans, &blocks, timer, &mut out)?;
+        let graded = grade_body(
+            ctx,
+            templates,
+            body,
+            obstacle.as_deref(),
+            input.name,
+            plans,
+            &blocks,
+            Patterns::Now,
+            timer,
+            &mut out,
+        )?;
         let about = BodyReport {
             body: input.name.to_owned(),
             measurements_m: measure(body, &MeasureOptions::default())
