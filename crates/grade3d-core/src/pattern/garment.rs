@@ -58,7 +58,7 @@ use super::assemble::{
     assemble, deviation_from_chord, polyline_length, polyline_length_3d, self_intersects, PieceError, PieceOptions,
     PlacedPanel, SeamReport,
 };
-use super::darts::{dart_opening, insert_darts, AutoDartOptions, DartOrigin, FoundDart, Trial};
+use super::darts::{dart_opening, insert_darts, AutoDartOptions, DartOrigin, FoundDart, Pass, Trial};
 use super::fabric::{fabric_strain, FabricStrain};
 use super::flatten::{distortion, flatten_with_sewn_lengths, Distortion, FlattenError, FlattenOptions, Flattening};
 use super::grade::{mirror_difference, MirrorDifference};
@@ -1098,8 +1098,15 @@ fn search_darts(
     let first = Trial { distortion: distortion(&panel.positions, &panel.triangles, &flat.uv), flat };
     // the search is asked for only when it is enabled ([`pattern`]); it stops at once below the target
     let min_intake = opts.min_dart_intake_mm * 1e-3;
-    let (panel, last, darts) = insert_darts(panel, first, n_nodes, min_intake, search, |p| {
-        let flat = flatten_held(p, &holds(p), &opts.flatten).ok()?;
+    // the candidates are ranked at the search's looser tolerances, the winner kept at the flattening's
+    let rank = FlattenOptions {
+        tolerance: opts.flatten.tolerance.max(search.rank_tolerance),
+        boundary_tolerance: opts.flatten.boundary_tolerance.max(search.rank_boundary_tolerance),
+        ..opts.flatten
+    };
+    let (panel, last, darts) = insert_darts(panel, first, n_nodes, min_intake, search, |p, pass| {
+        let precision = if pass == Pass::Rank { &rank } else { &opts.flatten };
+        let flat = flatten_held(p, &holds(p), precision).ok()?;
         Some(Trial { distortion: distortion(&p.positions, &p.triangles, &flat.uv), flat })
     });
     Ok(Searched { panel, darts, last })
