@@ -550,6 +550,37 @@ mod tests {
     }
 
     #[test]
+    fn the_winner_is_flattened_again_to_be_kept_and_the_next_best_wins_when_that_fails() {
+        // planted answer: the ranking flattening of the best first-round candidate is kept only if
+        // its `Keep` flattening holds too; refusing it there must give the second best of the
+        // same ranking, as if the best had not been a candidate at all
+        let p = panel(cap(0.3, 30.0, 24));
+        let opts = AutoDartOptions { max_darts: 1, ..AutoDartOptions::default() };
+        let passes = std::sync::Mutex::new(Vec::new());
+        let (_, _, best) = insert_darts(&p, flat(&p).unwrap(), 0, 3e-3, &opts, |q: &Panel, pass| {
+            passes.lock().unwrap().push(pass);
+            flat(q)
+        });
+        let passes = passes.into_inner().unwrap();
+        assert_eq!(passes.iter().filter(|&&x| x == Pass::Keep).count(), 1, "one kept flattening per dart");
+        assert!(passes.iter().filter(|&&x| x == Pass::Rank).count() >= 2, "a round ranks its candidates");
+        let first_apex = best[0].apex;
+        let refused = |q: &Panel| q.darts.last().and_then(|d| d.a.last()).map(|&v| q.positions[v]) == Some(first_apex);
+        let (_, _, second) = insert_darts(&p, flat(&p).unwrap(), 0, 3e-3, &opts, |q: &Panel, pass| {
+            if pass == Pass::Keep && refused(q) {
+                None
+            } else {
+                flat(q)
+            }
+        });
+        let (_, _, without) =
+            insert_darts(&p, flat(&p).unwrap(), 0, 3e-3, &opts, |q: &Panel, _| if refused(q) { None } else { flat(q) });
+        assert_eq!(second.len(), 1);
+        assert_ne!(second[0].apex, first_apex);
+        assert_eq!(second, without);
+    }
+
+    #[test]
     fn a_saddle_gets_no_dart_because_every_cut_would_overlap() {
         let p = panel(saddle());
         let first = flat(&p).unwrap();
