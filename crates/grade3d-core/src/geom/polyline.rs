@@ -151,7 +151,9 @@ impl Polyline {
         self.point_at_with(&cum, s)
     }
 
-    fn point_at_with(&self, cum: &[f64], s: f64) -> DVec3 {
+    /// [`Polyline::point_at`] with the cumulative lengths given
+    /// ([`Polyline::cumulative`]: many points of one curve).
+    pub(crate) fn point_at_with(&self, cum: &[f64], s: f64) -> DVec3 {
         let total = *cum.last().unwrap_or(&0.0);
         if self.points.is_empty() {
             return DVec3::ZERO;

@@ -126,10 +126,32 @@ pub fn bridged(loop_: &Polyline, plane: &Plane) -> Polyline {
 /// The point at arc parameter `s` of `loop_`, moved `radial` outward within
 /// `plane` (away from the loop's centroid).
 pub fn eased(loop_: &Polyline, s: f64, radial: f64, plane: &Plane) -> DVec3 {
-    let p = loop_.point_at(s);
-    let d = p - loop_.centroid();
-    let out = (d - plane.normal * d.dot(plane.normal)).normalize_or_zero();
-    p + out * radial
+    Walk::new(loop_).eased(s, radial, plane)
+}
+
+/// A loop ready for many [`eased`] points: its cumulative arc lengths,
+/// centroid and length taken once (issue #15: [`sampled_radial`]'s
+/// bisection re-took them for every point of every trial ring), the points
+/// the same to the bit.
+struct Walk<'a> {
+    loop_: &'a Polyline,
+    cum: Vec<f64>,
+    centroid: DVec3,
+    length: f64,
+}
+
+impl<'a> Walk<'a> {
+    fn new(loop_: &'a Polyline) -> Self {
+        Self { loop_, cum: loop_.cumulative(), centroid: loop_.centroid(), length: loop_.length() }
+    }
+
+    /// [`eased`].
+    fn eased(&self, s: f64, radial: f64, plane: &Plane) -> DVec3 {
+        let p = self.loop_.point_at_with(&self.cum, s);
+        let d = p - self.centroid;
+        let out = (d - plane.normal * d.dot(plane.normal)).normalize_or_zero();
+        p + out * radial
+    }
 }
 
 /// The ring edges of `curve` in `t` decoded at `positions` (module docs),
@@ -225,9 +247,21 @@ pub fn eased_arc(
     radial: f64,
     ends: (Option<DVec3>, Option<DVec3>),
 ) -> Vec<DVec3> {
+    eased_arc_on(&Walk::new(loop_), plane, s0, ds, n, radial, ends)
+}
+
+/// [`eased_arc`] on a [`Walk`].
+fn eased_arc_on(
+    walk: &Walk<'_>,
+    plane: &Plane,
+    s0: f64,
+    ds: f64,
+    n: usize,
+    radial: f64,
+    ends: (Option<DVec3>, Option<DVec3>),
+) -> Vec<DVec3> {
     let n = n.max(2);
-    let mut pts: Vec<DVec3> =
-        (0..n).map(|i| eased(loop_, s0 + ds * i as f64 / (n - 1) as f64, radial, plane)).collect();
+    let mut pts: Vec<DVec3> = (0..n).map(|i| walk.eased(s0 + ds * i as f64 / (n - 1) as f64, radial, plane)).collect();
     let shift_a = ends.0.map_or(DVec3::ZERO, |e| e - pts[0]);
     let shift_b = ends.1.map_or(DVec3::ZERO, |e| e - pts[n - 1]);
     if ends.0.is_some() || ends.1.is_some() {
@@ -263,10 +297,23 @@ pub fn ring_arcs(
     copies: &[Option<Profile>],
     radial: f64,
 ) -> Vec<Vec<DVec3>> {
-    let total = loop_.length();
+    ring_arcs_on(&Walk::new(loop_), plane, params, ends, counts, copies, radial)
+}
+
+/// [`ring_arcs`] on a [`Walk`].
+fn ring_arcs_on(
+    walk: &Walk<'_>,
+    plane: &Plane,
+    params: &[f64],
+    ends: &[Option<DVec3>],
+    counts: &[usize],
+    copies: &[Option<Profile>],
+    radial: f64,
+) -> Vec<Vec<DVec3>> {
+    let total = walk.length;
     let m = params.len();
     let end = |k: usize| ends.get(k).copied().flatten();
-    let at = |k: usize| end(k).unwrap_or_else(|| eased(loop_, params[k], radial, plane));
+    let at = |k: usize| end(k).unwrap_or_else(|| walk.eased(params[k], radial, plane));
     (0..m)
         .map(|k| {
             let j = (k + 1) % m;
@@ -274,7 +321,7 @@ pub fn ring_arcs(
             if let Some(Ok(copy)) = copies.get(k).and_then(|c| c.as_ref()).map(|c| c.relocated(at(k), at(j))) {
                 return copy.points().to_vec();
             }
-            eased_arc(loop_, plane, params[k], shorter_way(params[k], params[j], total), n, radial, (end(k), end(j)))
+            eased_arc_on(walk, plane, params[k], shorter_way(params[k], params[j], total), n, radial, (end(k), end(j)))
         })
         .collect()
 }
@@ -305,8 +352,9 @@ pub fn sampled_radial(
     copies: &[Option<Profile>],
 ) -> f64 {
     let base = tape_length(&[loop_], plane);
+    let walk = Walk::new(loop_);
     let gain = |r: f64| {
-        let pts: Vec<DVec3> = ring_arcs(loop_, plane, params, ends, counts, copies, r).concat();
+        let pts: Vec<DVec3> = ring_arcs_on(&walk, plane, params, ends, counts, copies, r).concat();
         tape_length(&[&Polyline::new(pts, true)], plane) - base
     };
     if ease.is_nan() || ease <= 0.0 || gain(0.0) >= ease {
@@ -344,8 +392,9 @@ pub fn ring_radial(loop_: &Polyline, plane: &Plane, ease: f64) -> f64 {
     let base = tape_length(&[loop_], plane);
     let cum = loop_.cumulative();
     let params: Vec<f64> = cum[..loop_.points.len()].to_vec();
+    let walk = Walk::new(loop_);
     for _ in 0..RADIAL_ITERATIONS {
-        let ring = Polyline::new(params.iter().map(|&s| eased(loop_, s, r, plane)).collect(), true);
+        let ring = Polyline::new(params.iter().map(|&s| walk.eased(s, r, plane)).collect(), true);
         let gained = tape_length(&[&ring], plane) - base;
         if !(gained.is_finite() && gained.abs() > f64::EPSILON) || ease == 0.0 {
             break;
