@@ -283,16 +283,22 @@ fn rasterise_band(
             // the barycentric coordinates and depth at the row's first centre, then stepped along x
             let (mut wa, mut wb) = (la[0] + la[1] * sx0 + la[2] * sy, lb[0] + lb[1] * sx0 + lb[2] * sy);
             let mut z = st.z[0] + st.z[1] * sx0 + st.z[2] * sy;
-            for i in row + sc.x[0]..=row + sc.x[1] {
+            // the row's pixels as slices, zipped: no bounds check nor reload per pixel
+            let span = row + sc.x[0]..row + sc.x[1] + 1;
+            let pixels = s.front_z[span.clone()]
+                .iter_mut()
+                .zip(&mut s.front_face[span.clone()])
+                .zip(s.back_z[span.clone()].iter_mut().zip(&mut s.back_face[span]));
+            for ((fz, ff), (bz, bf)) in pixels {
                 if wa >= 0.0 && wb >= 0.0 && wa + wb <= 1.0 {
                     let zf = z as f32;
-                    if zf < s.front_z[i] {
-                        s.front_z[i] = zf;
-                        s.front_face[i] = f;
+                    if zf < *fz {
+                        *fz = zf;
+                        *ff = f;
                     }
-                    if zf > s.back_z[i] {
-                        s.back_z[i] = zf;
-                        s.back_face[i] = f;
+                    if zf > *bz {
+                        *bz = zf;
+                        *bf = f;
                     }
                 }
                 wa += la[1];
