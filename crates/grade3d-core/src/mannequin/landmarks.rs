@@ -43,7 +43,7 @@ use crate::body::vocab::PointId;
 use crate::geom::mesh::{TriMesh, VertexId};
 use crate::geom::plane::Plane;
 use crate::geom::polyline::Polyline;
-use crate::geom::slice::slice;
+use crate::geom::slice::{slice, Section};
 
 /// Knobs of the hm08 landmark finder.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -214,12 +214,14 @@ pub fn hm08_landmarks(
         let mut pl = extreme(&cl, |p| p.x).ok_or_else(|| err(left, "ring misses its coronal plane"))?;
         let mut pr = extreme(&cr, |p| -p.x).ok_or_else(|| err(right, "ring misses its coronal plane"))?;
         if left == PointId::ThighLeft {
-            // the thigh girth lies below the crotch (ISO 8559-1 5.3.20)
+            // the thigh girth lies below the crotch (ISO 8559-1 5.3.20); one section for both legs
+            let below = std::cell::OnceCell::new();
+            let level = || below.get_or_init(|| slice(mesh, &Plane { normal: DVec3::Y, offset: thigh_top }));
             if pl.y > thigh_top {
-                pl = outer_point_at(mesh, thigh_top, pl, rl.centroid().z, 1.0).ok_or_else(|| err(left, BELOW))?;
+                pl = outer_point_at(level(), pl, rl.centroid().z, 1.0).ok_or_else(|| err(left, BELOW))?;
             }
             if pr.y > thigh_top {
-                pr = outer_point_at(mesh, thigh_top, pr, rr.centroid().z, -1.0).ok_or_else(|| err(right, BELOW))?;
+                pr = outer_point_at(level(), pr, rr.centroid().z, -1.0).ok_or_else(|| err(right, BELOW))?;
             }
         }
         lm.points.insert(left, pl);
@@ -238,11 +240,13 @@ pub fn hm08_landmarks(
     lm.points.insert(PointId::ShoulderRight, sr);
     // armpits: on the coronal section through the upper arm
     let arm_z = ring(mesh, ring_ids("upperarm-circ")).centroid().z;
+    // one coronal section for both sides (issue #15: it was cut twice)
+    let coronal = slice(mesh, &Plane { normal: DVec3::Z, offset: arm_z });
     for (bust, id, sign) in
         [(PointId::BustLeft, PointId::UnderarmLeft, 1.0), (PointId::BustRight, PointId::UnderarmRight, -1.0)]
     {
         let start_y = lm.points[&bust].y;
-        lm.points.insert(id, armpit(mesh, arm_z, start_y, sign).ok_or_else(|| err(id, "no armpit above the bust"))?);
+        lm.points.insert(id, armpit(&coronal, start_y, sign).ok_or_else(|| err(id, "no armpit above the bust"))?);
     }
     Ok(lm)
 }
@@ -251,30 +255,30 @@ pub fn hm08_landmarks(
 const BELOW: &str = "no section of the leg below the crotch";
 
 /// The outer point (`sign` +1: largest x, −1: smallest) where the loop of
-/// the horizontal section at height `y` nearest to `near` crosses the
-/// coronal plane `z = z`: the loop round the leg, or round both legs where
-/// they touch (its outer crossing is still this leg's side), never a hand.
-fn outer_point_at(mesh: &TriMesh, y: f64, near: DVec3, z: f64, sign: f64) -> Option<DVec3> {
-    let level = Plane { normal: DVec3::Y, offset: y };
-    let leg = slice(mesh, &level).into_iter().map(|s| s.polyline).filter(|p| p.closed).min_by(|a, b| {
+/// `level` (the mesh's horizontal section at some height) nearest to
+/// `near` crosses the coronal plane `z = z`: the loop round the leg, or
+/// round both legs where they touch (its outer crossing is still this
+/// leg's side), never a hand.
+fn outer_point_at(level: &[Section], near: DVec3, z: f64, sign: f64) -> Option<DVec3> {
+    let leg = level.iter().map(|s| &s.polyline).filter(|p| p.closed).min_by(|a, b| {
         let d = |p: &Polyline| p.closest(near).map_or(f64::INFINITY, |c| c.point.distance(near));
         d(a).total_cmp(&d(b))
     })?;
-    extreme(&plane_crossings(&leg, &Plane { normal: DVec3::Z, offset: z }), |p| sign * p.x)
+    extreme(&plane_crossings(leg, &Plane { normal: DVec3::Z, offset: z }), |p| sign * p.x)
 }
 
-/// On the coronal section `z = arm_z`, starts at the torso's side at
-/// height `start_y` (the crossing nearest the midline on the side `sign`)
-/// and walks up to the first local maximum of height.
-fn armpit(mesh: &TriMesh, arm_z: f64, start_y: f64, sign: f64) -> Option<DVec3> {
-    let plane = Plane { normal: DVec3::Z, offset: arm_z };
+/// On `coronal`, the mesh's section by a coronal plane through the upper
+/// arms, starts at the torso's side at height `start_y` (the crossing
+/// nearest the midline on the side `sign`) and walks up to the first local
+/// maximum of height.
+fn armpit(coronal: &[Section], start_y: f64, sign: f64) -> Option<DVec3> {
     let level = Plane { normal: DVec3::Y, offset: start_y };
-    let mut best: Option<(f64, Polyline, DVec3)> = None;
-    for s in slice(mesh, &plane).into_iter().filter(|s| s.polyline.closed) {
+    let mut best: Option<(f64, &Polyline, DVec3)> = None;
+    for s in coronal.iter().filter(|s| s.polyline.closed) {
         for p in plane_crossings(&s.polyline, &level) {
             let x = p.x * sign;
             if x > 0.0 && best.as_ref().is_none_or(|b| x < b.0) {
-                best = Some((x, s.polyline.clone(), p));
+                best = Some((x, &s.polyline, p));
             }
         }
     }
