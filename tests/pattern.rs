@@ -533,6 +533,25 @@ fn a_block_is_carried_where_it_holds_and_decided_where_not() {
     let grade = |darts: DartSource<'_>| grade_with_darts(&t, &body, Some(&obstacle), &name, &go, darts).unwrap();
     let decided = grade(DartSource::Decide);
     assert!(!decided.pattern.dart_plan.found.is_empty(), "the trousers find darts on this body");
+    // fast vs reference (issue #15): the fit report with the inside answers the grade's exact
+    // passes kept equals the one that asks the winding tree about every vertex again
+    let (kept, asked) = {
+        use grade3d_core::report::{fit_report, FitReportOptions};
+        let fo = FitReportOptions::default();
+        let mut cleared = decided.clone();
+        cleared.inside.raw.clear();
+        (
+            fit_report(&t, &decided, &body, Some(&obstacle), &fo).unwrap(),
+            fit_report(&t, &cleared, &body, Some(&obstacle), &fo).unwrap(),
+        )
+    };
+    let known = decided.inside.iter().filter(|k| k.is_some()).count();
+    assert!(known * 10 >= decided.mesh.positions.len() * 9, "{known} of {} kept", decided.mesh.positions.len());
+    assert_eq!(
+        kept.ease_mm.iter().map(|e| e.to_bits()).collect::<Vec<_>>(),
+        asked.ease_mm.iter().map(|e| e.to_bits()).collect::<Vec<_>>()
+    );
+    assert_eq!(kept.report, asked.report);
     // its own plan as a block: the same pattern
     let own = grade(DartSource::Block(&decided.pattern.dart_plan));
     assert_eq!(own.pattern.pieces, decided.pattern.pieces);

@@ -166,6 +166,12 @@ pub struct Graded {
     /// ([`crate::body::ease::girth_ease`]); the lift's local bumps over hip
     /// bones and knees are drape, not cloth length.
     pub cut_positions: TiVec<VertexId, glam::DVec3>,
+    /// Per vertex of `mesh`, whether the body's exact inside test
+    /// ([`crate::geom::winding::WindingTree::is_inside`]) found it inside
+    /// at its final position, where one of the grade's exact passes asked
+    /// (issue #15: the fit report then need not ask again); empty without
+    /// an obstacle.
+    pub inside: TiVec<VertexId, Option<bool>>,
 }
 
 impl Graded {
@@ -303,6 +309,7 @@ pub fn grade_with_darts(
     let expected_ease_mm = expected_ease(t, body, &m0);
     let mut surface_ms = 0.0;
     let mut unlifted = None;
+    let mut inside = TiVec::new();
     let coarse = RefineMesh::from_coarse(&m0, &edges)?;
     let decode_ms = ms(start) - coarse_ms;
 
@@ -326,8 +333,10 @@ pub fn grade_with_darts(
                 clearance_mm,
                 body.thigh_contact.as_ref(),
                 &opts.clear,
+                &mut collider.inside,
             );
             surface_ms = ms(surface_start);
+            inside = mesh.positions.iter().map(|&p| collider.inside.get(p)).collect();
             (mesh, reports, lineage, report)
         }
         None => {
@@ -350,6 +359,7 @@ pub fn grade_with_darts(
     let cut_positions = cut_from.to_owned();
     Ok(Graded {
         cut_positions,
+        inside,
         girth_lines,
         mesh,
         levels: level_reports,

@@ -202,7 +202,13 @@ pub fn fit_report(
     // girths are measured on the garment as cut (the pattern's surface)
     let cut = g.cut_mesh().map_err(FitReportError::CutMesh)?;
     let ease_mm: Vec<f64> = match obstacle {
-        Some(ob) => g.mesh.positions.iter().map(|&p| -ob.tree.signed_depth(p) * 1e3).collect(),
+        // the inside answers the grade's exact passes already have are not asked again
+        Some(ob) => g
+            .mesh
+            .positions
+            .iter_enumerated()
+            .map(|(v, &p)| -ob.tree.signed_depth_known(p, g.inside.get(v).copied().flatten()) * 1e3)
+            .collect(),
         None => vec![0.0; g.mesh.positions.len()],
     };
     let inside = ease_mm.iter().filter(|&&e| e < 0.0).count();

@@ -360,8 +360,15 @@ impl WindingTree {
     /// [`WindingTree::is_inside`]) and negative outside. In the units of the
     /// mesh (metres for bodies).
     pub fn signed_depth(&self, p: DVec3) -> f64 {
+        self.signed_depth_known(p, None)
+    }
+
+    /// [`WindingTree::signed_depth`] where `inside`, when given, is what
+    /// [`WindingTree::is_inside`] answered for `p` before
+    /// ([`InsideMemo::get`]): the same value without the winding number.
+    pub fn signed_depth_known(&self, p: DVec3, inside: Option<bool>) -> f64 {
         let d = self.closest_point(p).2;
-        if self.is_inside(p) {
+        if inside.unwrap_or_else(|| self.is_inside(p)) {
             d
         } else {
             -d
@@ -746,6 +753,27 @@ pub fn penetration_stats(tree: &WindingTree, points: &[DVec3]) -> PenetrationSta
     stats
 }
 
+/// Answers of [`WindingTree::is_inside`] kept by the exact bits of the
+/// point asked about (issue #15): a grade's exact passes (the settling, the
+/// surface clearing) and its fit report ask about the same unmoved garment
+/// vertices one after another, and a winding number costs thousands of
+/// times a lookup. A kept answer is the answer the tree gives for that
+/// point, so nothing changes but the time. One memo per tree.
+#[derive(Debug, Clone, Default)]
+pub struct InsideMemo(rustc_hash::FxHashMap<[u64; 3], bool>);
+
+impl InsideMemo {
+    /// [`WindingTree::is_inside`] of `p`, kept.
+    pub fn is_inside(&mut self, tree: &WindingTree, p: DVec3) -> bool {
+        *self.0.entry(p.to_array().map(f64::to_bits)).or_insert_with(|| tree.is_inside(p))
+    }
+
+    /// The kept answer for `p`, if it was asked about.
+    pub fn get(&self, p: DVec3) -> Option<bool> {
+        self.0.get(&p.to_array().map(f64::to_bits)).copied()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -858,6 +886,29 @@ mod tests {
         // the sliver is still part of the surface for closest points
         let (q, _, d) = tree.closest_point(DVec3::new(0.5, -0.1, 0.0));
         assert!((q - 0.5 * DVec3::X).length() < 1e-12 && (d - 0.1).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_kept_inside_answer_is_the_trees_answer() {
+        // fast vs reference: the memo answers as the tree does, keeps exactly the points asked
+        // about (by their bits: -0.0 is another point), and signed_depth_known with a kept
+        // answer equals signed_depth
+        let m = icosphere(3, 1.0);
+        let tree = WindingTree::new(&m, &WindingOptions::default());
+        let mut memo = InsideMemo::default();
+        let mut rng = Rng(11);
+        let points: Vec<DVec3> = (0..300).map(|_| rng.in_box(DVec3::splat(-1.5), DVec3::splat(1.5))).collect();
+        for &p in &points {
+            assert_eq!(memo.get(p), None);
+            assert_eq!(memo.is_inside(&tree, p), tree.is_inside(p));
+            assert_eq!(memo.get(p), Some(tree.is_inside(p)));
+            assert_eq!(tree.signed_depth_known(p, memo.get(p)).to_bits(), tree.signed_depth(p).to_bits());
+        }
+        assert!(points.iter().any(|&p| tree.is_inside(p)) && points.iter().any(|&p| !tree.is_inside(p)));
+        assert_eq!(memo.get(DVec3::new(-0.0, 0.0, 0.0)), None);
+        memo.is_inside(&tree, DVec3::ZERO);
+        assert_eq!(memo.get(DVec3::ZERO), Some(true));
+        assert_eq!(memo.get(DVec3::new(-0.0, 0.0, 0.0)), None);
     }
 
     #[test]

@@ -81,7 +81,7 @@ use typed_index_collections::{TiSlice, TiVec};
 
 use crate::geom::intersect::{count_pairs, intersecting_pairs};
 use crate::geom::mesh::{FaceId, VertexId};
-use crate::geom::winding::WindingTree;
+use crate::geom::winding::{InsideMemo, WindingTree};
 use crate::template::codec::CoarseMesh;
 use crate::template::profile::{Profile, ProfileError};
 
@@ -323,7 +323,9 @@ fn fade(need: &mut TiSlice<VertexId, f64>, ring: &TiSlice<VertexId, Vec<VertexId
 /// Lifts garment triangles off the body until no garment triangle crosses a
 /// body triangle (module docs). A lifted vertex that lands inside the body
 /// is moved out to `clearance_mm` (the free vertices' clearance). The pairs
-/// left at `contact`, the body's thigh contact, are counted apart.
+/// left at `contact`, the body's thigh contact, are counted apart. `memo`
+/// keeps the inside answers ([`InsideMemo`], shared with the grade's other
+/// exact passes).
 pub fn clear_surface(
     tree: &WindingTree,
     positions: &mut TiSlice<VertexId, DVec3>,
@@ -331,6 +333,7 @@ pub fn clear_surface(
     clearance_mm: f64,
     contact: Option<&ThighContact>,
     opts: &ClearOptions,
+    memo: &mut InsideMemo,
 ) -> SurfaceClearReport {
     let c = clearance_mm * 1e-3;
     let lc = opts.lift_clearance_mm * 1e-3;
@@ -395,7 +398,7 @@ pub fn clear_surface(
             if need[i] != 0.0 {
                 *p += normals[i] * need[i];
                 report.lifts += 1;
-                if tree.is_inside(*p) {
+                if memo.is_inside(tree, *p) {
                     push_out(tree, p, c, opts.max_tries);
                 }
             }
@@ -441,7 +444,8 @@ mod tests {
         let tris: TiVec<FaceId, [VertexId; 3]> = shell.triangles().to_vec().into();
         let mut pos: TiVec<VertexId, DVec3> = shell.positions().to_vec().into();
         assert!(pos.iter().all(|p| !tree.is_inside(*p)));
-        let report = clear_surface(&tree, &mut pos, &tris, 3.0, None, &ClearOptions::default());
+        let report =
+            clear_surface(&tree, &mut pos, &tris, 3.0, None, &ClearOptions::default(), &mut InsideMemo::default());
         assert!(report.pairs_before > 0, "{report:?}");
         assert_eq!(report.triangles_before, 20, "every face of the shell chords through: {report:?}");
         assert_eq!(report.pairs_after, 0, "{report:?}");

@@ -39,7 +39,7 @@ use typed_index_collections::TiSlice;
 
 use crate::collide::depth::{inside_with_margin, DepthMap};
 use crate::geom::mesh::VertexId;
-use crate::geom::winding::WindingTree;
+use crate::geom::winding::{InsideMemo, WindingTree};
 use crate::refine::clear::{push_out, ClearOptions, CoarseClearReport, SurfaceClearReport};
 
 /// Knobs of collision avoidance.
@@ -88,12 +88,16 @@ pub struct Collider<'a> {
     previous: Vec<DVec3>,
     /// Running totals.
     pub report: CollisionReport,
+    /// The exact passes' inside answers ([`InsideMemo`]): the surface
+    /// clearing and the fit report ask again about the vertices they did
+    /// not move.
+    pub inside: InsideMemo,
 }
 
 impl<'a> Collider<'a> {
     /// A collider over the depth maps of one body.
     pub fn new(maps: &'a [DepthMap], opts: CollisionOptions) -> Self {
-        Self { maps, opts, previous: Vec::new(), report: CollisionReport::default() }
+        Self { maps, opts, previous: Vec::new(), report: CollisionReport::default(), inside: InsideMemo::default() }
     }
 
     /// The hook: refuse updates that enter the body, push out what is inside,
@@ -155,11 +159,12 @@ pub fn settle_exact(
     positions: &mut TiSlice<VertexId, DVec3>,
     fixed: &TiSlice<VertexId, bool>,
     clearance_mm: f64,
+    memo: &mut InsideMemo,
 ) -> usize {
     let clearance = clearance_mm * 1e-3;
     let mut moved = 0;
     for (p, &f) in positions.iter_mut().zip(fixed) {
-        if f || !tree.is_inside(*p) {
+        if f || !memo.is_inside(tree, *p) {
             continue;
         }
         moved += 1;
@@ -171,7 +176,7 @@ pub fn settle_exact(
                 break;
             }
             *p = q + (q - *p) / d * clearance;
-            if !tree.is_inside(*p) {
+            if !memo.is_inside(tree, *p) {
                 break;
             }
         }
@@ -187,7 +192,7 @@ impl Collider<'_> {
         positions: &mut TiSlice<VertexId, DVec3>,
         fixed: &TiSlice<VertexId, bool>,
     ) {
-        self.report.settled += settle_exact(tree, positions, fixed, self.opts.clearance_mm);
+        self.report.settled += settle_exact(tree, positions, fixed, self.opts.clearance_mm, &mut self.inside);
     }
 
     /// The exact final pass for the `fixed` vertices: each one `tree` finds
@@ -201,7 +206,9 @@ impl Collider<'_> {
         opts: &ClearOptions,
     ) {
         for (p, &f) in positions.iter_mut().zip(fixed) {
-            if f && tree.is_inside(*p) && push_out(tree, p, opts.fixed_clearance_mm * 1e-3, opts.max_tries).is_some() {
+            if f && self.inside.is_inside(tree, *p)
+                && push_out(tree, p, opts.fixed_clearance_mm * 1e-3, opts.max_tries).is_some()
+            {
                 self.report.fixed_settled += 1;
             }
         }
