@@ -1,6 +1,7 @@
 //! Geometry kernel: meshes, planes, polylines, plane sections, proximity
-//! queries and simplification. Pure functions on plain data.
+//! queries, simplification and Coons patches. Pure functions on plain data.
 
+pub mod coons;
 pub mod intersect;
 pub mod mesh;
 pub mod plane;
