@@ -1,10 +1,12 @@
 //! Garment feature templates (seed 000 §3–4): the document format, encoding
 //! a garment mesh on a reference body, decoding it onto any feature human
-//! model (Eq. 1, Eq. 2, Eq. 5), edge profiles, and the built-in library.
+//! model (Eq. 1, Eq. 2, Eq. 5), edge profiles, sketch edits (§4: node moves
+//! and profiles from 2D strokes), and the built-in library.
 
 pub mod codec;
 pub mod format;
 pub mod girth;
 pub mod library;
 pub mod profile;
+pub mod sketch;
 pub mod topology;
