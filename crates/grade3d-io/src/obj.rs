@@ -1,7 +1,8 @@
 //! Wavefront OBJ, the subset panels travel in between grade3d and peer
 //! tools (`benches/peer_flatten.py`): `v x y z`, optional `vt u v`, and
 //! `f` with 1-based (or negative, relative) indices, `v/vt/vn` forms
-//! accepted; polygons are fan-triangulated. Everything else is ignored.
+//! accepted; polygons are fan-triangulated; `g`/`o` groups name the pieces
+//! of a garment ([`read_obj_panels`]). Everything else is ignored.
 //!
 //! Failure modes: [`ObjError`] naming the line — a malformed number, a
 //! face with fewer than three corners, an index out of range.
@@ -9,6 +10,7 @@
 use std::fmt::Write;
 
 use glam::{DVec2, DVec3};
+use grade3d_core::template::garment_panels::PanelMesh;
 
 /// Why an OBJ text could not be read.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -39,13 +41,65 @@ pub enum ObjError {
     },
 }
 
-/// Reads positions and triangles.
+/// Reads positions and triangles (every group's).
 ///
 /// # Errors
 /// [`ObjError`].
 pub fn read_obj(text: &str) -> Result<(Vec<DVec3>, Vec<[u32; 3]>), ObjError> {
+    let parsed = parse(text)?;
+    Ok((parsed.positions, parsed.triangles))
+}
+
+/// Reads a garment exported one piece per group (issue #18: CLO3D,
+/// Browzwear and Marvelous Designer write each pattern piece as a `g` or
+/// `o` group): one [`PanelMesh`] per group that has faces, in the order of
+/// their first face, named as the group (`default` for faces before any
+/// `g`/`o` line; a name met again continues its group). Each piece has its
+/// own vertices — those its faces use, in the order they are first used —
+/// so two pieces that share a vertex of the file each get a copy (their
+/// seam is found again by welding, `template::garment_panels`).
+///
+/// # Errors
+/// [`ObjError`].
+pub fn read_obj_panels(text: &str) -> Result<Vec<PanelMesh>, ObjError> {
+    let parsed = parse(text)?;
+    let mut panels: Vec<(PanelMesh, Vec<u32>)> = Vec::new();
+    let mut slot: Vec<Option<usize>> = vec![None; parsed.groups.len()];
+    for (t, &g) in parsed.triangles.iter().zip(&parsed.group_of) {
+        let at = *slot[g].get_or_insert_with(|| {
+            let mesh = PanelMesh { name: parsed.groups[g].clone(), positions: Vec::new(), triangles: Vec::new() };
+            panels.push((mesh, vec![u32::MAX; parsed.positions.len()]));
+            panels.len() - 1
+        });
+        let (mesh, local) = &mut panels[at];
+        let corners = t.map(|v| {
+            if local[v as usize] == u32::MAX {
+                local[v as usize] = mesh.positions.len() as u32;
+                mesh.positions.push(parsed.positions[v as usize]);
+            }
+            local[v as usize]
+        });
+        mesh.triangles.push(corners);
+    }
+    Ok(panels.into_iter().map(|(mesh, _)| mesh).collect())
+}
+
+/// An OBJ text read: positions, triangles, and each triangle's group.
+struct Parsed {
+    positions: Vec<DVec3>,
+    triangles: Vec<[u32; 3]>,
+    /// Per triangle, its index in `groups`.
+    group_of: Vec<usize>,
+    /// Group names, in the order first named (`default` first: faces before any group).
+    groups: Vec<String>,
+}
+
+fn parse(text: &str) -> Result<Parsed, ObjError> {
     let mut positions = Vec::new();
     let mut triangles = Vec::new();
+    let mut group_of = Vec::new();
+    let mut groups = vec!["default".to_string()];
+    let mut group = 0;
     for (i, raw) in text.lines().enumerate() {
         let line = i + 1;
         let mut it = raw.split_whitespace();
@@ -61,6 +115,14 @@ pub fn read_obj(text: &str) -> Result<(Vec<DVec3>, Vec<[u32; 3]>), ObjError> {
                         .ok_or_else(|| ObjError::Number { line, text: t.to_string() })?;
                 }
                 positions.push(DVec3::from_array(c));
+            }
+            Some("g" | "o") => {
+                let name = it.collect::<Vec<_>>().join(" ");
+                let name = if name.is_empty() { "default".to_string() } else { name };
+                group = groups.iter().position(|g| *g == name).unwrap_or_else(|| {
+                    groups.push(name);
+                    groups.len() - 1
+                });
             }
             Some("f") => {
                 let mut corners = Vec::new();
@@ -79,12 +141,13 @@ pub fn read_obj(text: &str) -> Result<(Vec<DVec3>, Vec<[u32; 3]>), ObjError> {
                 }
                 for k in 1..corners.len() - 1 {
                     triangles.push([corners[0], corners[k], corners[k + 1]]);
+                    group_of.push(group);
                 }
             }
             _ => {}
         }
     }
-    Ok((positions, triangles))
+    Ok(Parsed { positions, triangles, group_of, groups })
 }
 
 /// Writes positions, optional texture coordinates (one per vertex) and triangles.
@@ -120,6 +183,34 @@ mod tests {
         assert_eq!(read_obj(&text).unwrap(), (p, vec![[0, 1, 2], [1, 3, 2]]));
         let quad = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 -1\n";
         assert_eq!(read_obj(quad).unwrap().1, vec![[0, 1, 2], [0, 2, 3]]);
+    }
+
+    #[test]
+    fn groups_become_pieces_with_their_own_vertices_and_weld_back_into_a_seam() {
+        // two squares sharing the file's vertices 2 and 5 (x = 1): a front and a back
+        let text = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nv 2 1 0\n\
+                    g front\nf 1 2 3 4\no back piece\nf 2 5 6 3\ng front\nf 1 3 4\n";
+        let panels = read_obj_panels(text).unwrap();
+        assert_eq!(panels.iter().map(|p| p.name.as_str()).collect::<Vec<_>>(), vec!["front", "back piece"]);
+        // the front: its quad and the triangle met again under its name, 4 own vertices
+        assert_eq!(panels[0].triangles, vec![[0, 1, 2], [0, 2, 3], [0, 2, 3]]);
+        assert_eq!(panels[0].positions.len(), 4);
+        assert_eq!(
+            panels[1].positions,
+            vec![DVec3::X, DVec3::new(2.0, 0.0, 0.0), DVec3::new(2.0, 1.0, 0.0), DVec3::new(1.0, 1.0, 0.0)]
+        );
+        assert_eq!(panels[1].triangles, vec![[0, 1, 2], [0, 2, 3]]);
+        // faces before any group: `default`
+        let lone = read_obj_panels("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+        assert_eq!(lone[0].name, "default");
+        // welded, the two pieces meet along x = 1 (the front's repeated triangle left out)
+        use grade3d_core::template::garment_panels::{weld_panels, WeldOptions};
+        let mut pieces = panels;
+        pieces[0].triangles.pop();
+        let g = weld_panels(&pieces, &WeldOptions::default()).unwrap();
+        assert_eq!(g.seams.len(), 1);
+        assert_eq!(g.seams[0].chain.len(), 2);
+        assert!(g.seams[0].chain.iter().all(|&v| g.positions[v as usize].x == 1.0));
     }
 
     #[test]
