@@ -504,12 +504,11 @@ fn grade_body(
         timer.add_ms(stage::CLEAR, g.timings.clear_ms);
         timer.add_ms(stage::PATTERN, g.timings.pattern_ms);
         let start = Instant::now();
-        let stem = format!("{}-{}", t.name, size);
         if patterns == Patterns::Now {
             out.extend(pattern_artefacts(&t.name, size, &g)?);
         }
         let (glb, fit) = garment_glb(t, &g, body, obstacle)?;
-        out.push(Artefact { name: format!("{stem}.garment.glb"), media_type: "model/gltf-binary", bytes: glb });
+        out.push(Artefact { name: garment_glb_name(&t.name, size), media_type: "model/gltf-binary", bytes: glb });
         timer.add(stage::EXPORT, start);
         graded.push((t.name.clone(), g, fit));
     }
@@ -593,7 +592,7 @@ fn write_patterns(rows: &mut [GradedRow]) -> Result<(), WorkError> {
         .par_iter_mut()
         .map(|(size, graded, out)| {
             for (template, g, _) in graded.iter() {
-                let glb = format!("{template}-{size}.garment.glb");
+                let glb = garment_glb_name(template, size);
                 let at = out.iter().position(|a| a.name == glb).unwrap_or(out.len());
                 out.splice(at..at, pattern_artefacts(template, size, g)?);
             }
@@ -601,6 +600,12 @@ fn write_patterns(rows: &mut [GradedRow]) -> Result<(), WorkError> {
         })
         .collect();
     written.into_iter().collect()
+}
+
+/// The name of a garment GLB artefact (the pattern artefacts of its size
+/// are written before it, [`write_patterns`]).
+fn garment_glb_name(template: &str, size: &str) -> String {
+    format!("{template}-{size}.garment.glb")
 }
 
 /// The garment as GLB with the ease (distance to the body, mm) as a vertex

@@ -56,6 +56,8 @@
 
 use glam::DVec3;
 
+use crate::geom::polyline::Polyline;
+
 /// The blending functions `f₁`, `f₂ = 1 − f₁` (module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -172,12 +174,12 @@ pub enum CoonsError {
     },
 }
 
-/// One side: its points and their cumulative chord lengths, normalised.
+/// One side: its polyline and cumulative chord lengths
+/// ([`Polyline::cumulative`]).
 #[derive(Debug, Clone, PartialEq)]
 struct Curve {
-    points: Vec<DVec3>,
-    /// `t` of each point, from 0 to 1 (all 0 for a single point).
-    t: Vec<f64>,
+    line: Polyline,
+    cum: Vec<f64>,
 }
 
 impl Curve {
@@ -188,59 +190,42 @@ impl Curve {
         if let Some(index) = points.iter().position(|p| !p.is_finite()) {
             return Err(CoonsError::NonFinite { side, index });
         }
-        let mut t = Vec::with_capacity(points.len());
-        let mut acc = 0.0;
-        t.push(0.0);
-        for w in points.windows(2) {
-            acc += w[0].distance(w[1]);
-            t.push(acc);
-        }
-        if acc > 0.0 {
-            for x in &mut t {
-                *x /= acc;
-            }
-            // the last parameter exactly 1, whatever the division left
-            if let Some(last) = t.last_mut() {
-                *last = 1.0;
-            }
-        } else {
-            t.fill(0.0);
-        }
-        Ok(Self { points: points.to_vec(), t })
+        let line = Polyline::new(points.to_vec(), false);
+        let cum = line.cumulative();
+        Ok(Self { line, cum })
+    }
+
+    /// Its length (0 for a single point, or points all in one place).
+    fn length(&self) -> f64 {
+        self.cum.last().copied().unwrap_or(0.0)
     }
 
     /// Whether the side is one point (or points all in one place).
     fn is_point(&self) -> bool {
-        self.t.last().is_none_or(|&l| l == 0.0)
+        self.length() == 0.0
     }
 
     fn first(&self) -> DVec3 {
-        self.points[0]
+        self.line.points[0]
     }
 
     fn last(&self) -> DVec3 {
-        self.points[self.points.len() - 1]
+        self.line.points[self.line.points.len() - 1]
     }
 
-    /// The point at parameter `t` (clamped to `[0, 1]`): on the segment whose
-    /// parameters bracket it, linearly; a sample's own parameter gives the
-    /// sample exactly.
+    /// The point at fraction `t` of its length (clamped to `[0, 1]`,
+    /// [`Polyline::point_at`]).
     fn at(&self, t: f64) -> DVec3 {
         if self.is_point() {
-            return self.points[0];
+            return self.first();
         }
-        let t = t.clamp(0.0, 1.0);
-        // the first segment whose end parameter is ≥ t
-        let k = self.t.partition_point(|&x| x < t).clamp(1, self.points.len() - 1);
-        let (t0, t1) = (self.t[k - 1], self.t[k]);
-        if t == t1 {
-            return self.points[k];
-        }
-        if t1 <= t0 {
-            return self.points[k];
-        }
-        let w = (t - t0) / (t1 - t0);
-        self.points[k - 1].lerp(self.points[k], w)
+        self.line.point_at_with(&self.cum, t.clamp(0.0, 1.0) * self.length())
+    }
+
+    /// The parameter `t` of its sample `k`.
+    #[cfg(test)]
+    fn param(&self, k: usize) -> f64 {
+        self.cum[k] / self.length()
     }
 }
 
@@ -432,19 +417,19 @@ mod tests {
             ];
             let p = CoonsPatch::new(&sides[0], &sides[1], &sides[2], &sides[3], &opts).unwrap();
             for (k, q) in sides[0].iter().enumerate() {
-                assert!((p.at(p.bottom.t[k], 0.0) - *q).length() < 1e-12);
+                assert!((p.at(p.bottom.param(k), 0.0) - *q).length() < 1e-12);
             }
             for (k, q) in sides[1].iter().enumerate() {
-                assert!((p.at(p.top.t[k], 1.0) - *q).length() < 1e-12);
+                assert!((p.at(p.top.param(k), 1.0) - *q).length() < 1e-12);
             }
             for (k, q) in sides[2].iter().enumerate() {
-                assert!((p.at(0.0, p.left.t[k]) - *q).length() < 1e-12);
+                assert!((p.at(0.0, p.left.param(k)) - *q).length() < 1e-12);
             }
             for (k, q) in sides[3].iter().enumerate() {
-                assert!((p.at(1.0, p.right.t[k]) - *q).length() < 1e-12);
+                assert!((p.at(1.0, p.right.param(k)) - *q).length() < 1e-12);
             }
             // and between samples, the sides' own segments
-            let t = 0.5 * (p.bottom.t[3] + p.bottom.t[4]);
+            let t = 0.5 * (p.bottom.param(3) + p.bottom.param(4));
             assert!((p.at(t, 0.0) - sides[0][3].lerp(sides[0][4], 0.5)).length() < 1e-12);
         }
     }

@@ -60,6 +60,7 @@ use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
 use crate::geom::plane::Plane;
+use crate::geom::polyline::point_segment;
 
 /// The canonical orthographic views (module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -236,16 +237,8 @@ fn distance_to_stroke(q: DVec2, stroke: &[DVec2]) -> f64 {
     if stroke.len() == 1 {
         return q.distance(stroke[0]);
     }
-    stroke
-        .windows(2)
-        .map(|w| {
-            let (a, b) = (w[0], w[1]);
-            let ab = b - a;
-            let t =
-                if ab.length_squared() > 0.0 { ((q - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0) } else { 0.0 };
-            q.distance(a + ab * t)
-        })
-        .fold(f64::INFINITY, f64::min)
+    let at = |a: DVec2, b: DVec2| a.lerp(b, point_segment(q.extend(0.0), a.extend(0.0), b.extend(0.0)));
+    stroke.windows(2).map(|w| q.distance(at(w[0], w[1]))).fold(f64::INFINITY, f64::min)
 }
 
 /// §4.3 step 1: the edges (indices into `edges`) whose two nodes are
