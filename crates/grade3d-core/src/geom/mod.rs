@@ -2,6 +2,7 @@
 //! queries, simplification and Coons patches. Pure functions on plain data.
 
 pub mod coons;
+pub mod cut;
 pub mod intersect;
 pub mod mesh;
 pub mod plane;

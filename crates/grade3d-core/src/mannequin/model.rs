@@ -283,6 +283,20 @@ impl BodyModel {
         Ok(pos)
     }
 
+    /// The model's base mesh in metres, no target applied: the body
+    /// MakeHuman's own helper geometry (`helper-skirt`, `helper-tights`,
+    /// `fixtures/garments/`) was modelled on, hence the design body of the
+    /// garments made from it (issue #18's round trip).
+    pub fn base_mesh(&self) -> Result<TriMesh, MannequinError> {
+        let pos = self
+            .data
+            .positions
+            .iter()
+            .map(|p| DVec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2])) * POSITION_UNIT_DM * METRES_PER_DM)
+            .collect();
+        Ok(TriMesh::new(pos, self.triangles.clone())?)
+    }
+
     /// The skin mesh in metres for the given parameters.
     pub fn build(&self, params: &MannequinParams) -> Result<TriMesh, MannequinError> {
         Ok(TriMesh::new(self.positions(params)?, self.triangles.clone())?)

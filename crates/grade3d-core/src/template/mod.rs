@@ -5,6 +5,7 @@
 
 pub mod codec;
 pub mod format;
+pub mod from_garment;
 pub mod garment_panels;
 pub mod girth;
 pub mod library;

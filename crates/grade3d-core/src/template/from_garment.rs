@@ -1,0 +1,1433 @@
+//! A template from a designed garment (issue #18, item 1; seed 000 §3.3):
+//! the pieces a CAD export hands over, draped on the body they were
+//! designed on, become a feature template that grades onto any body.
+//!
+//! # Method
+//!
+//! 1. **Weld** the pieces and find their seams
+//!    ([`super::garment_panels::weld_panels`]).
+//! 2. **Cut tubes.** A piece that is not a disc cannot be laid flat. With
+//!    [`TubeCut::Sides`] it is cut by the body's side plane (through the
+//!    hip girth's centroid, normal the body's front axis) into `…-front` and
+//!    `…-back` ([`crate::geom::cut`]); a part still not a disc is cut again by
+//!    the sagittal plane into `…-left` and `…-right`.
+//! 3. **Girth lines.** For every girth a template may declare ease at
+//!    ([`super::girth::ring_curves`]), the garment is cut by the girth's
+//!    plane; a closed section loop that encloses the body's girth and no
+//!    other part of the body in that plane (a skirt at the thigh encloses
+//!    both legs: not a thigh girth) is the garment's crossing with that
+//!    girth. Its ease is `tape(section) − tape(girth)` (the tape bridging
+//!    concavities, [`crate::geom::polyline::tape_length`]), stored as the
+//!    template's `ease_mm`, and its loop becomes a line of template edges.
+//! 4. **Nodes** (seed 000 §3.3: the encoded nodes `V^f`):
+//!    * on each girth line, the section point in the direction of each of
+//!      the girth's feature points from its centroid, tied to that point
+//!      (a *ring node*: decoding places it on the body's eased girth,
+//!      [`super::girth`]); a seam or hem crossing the line within
+//!      [`GarmentOptions::ring_merge_mm`] of one takes its place;
+//!    * where a piece's outline changes what it runs along (a seam to
+//!      another piece, a hem, a girth line), and where it turns by more
+//!      than [`GarmentOptions::corner_angle_deg`];
+//!    * along seams and hems, evenly, so that no outline arc between nodes
+//!      exceeds [`GarmentOptions::max_edge_mm`]; inside, farthest-point
+//!      samples until every vertex lies within `interior_spacing ×
+//!      max_edge_mm` of a node;
+//!    * the positions the caller lists (snapped to the nearest vertex).
+//! 5. **Topology** by QEM contraction with the nodes kept
+//!    ([`super::topology`], seed 000 Fig. 8), the surface first cut along
+//!    seams and girth lines so that each outline arc between two nodes
+//!    contracts to exactly one template edge.
+//! 6. **Profiles** (seed 000 Eq. (3)): an outline edge carries the dense
+//!    seam, hem or girth polyline between its nodes; an interior edge the
+//!    chord's points projected onto the garment; each resampled by arc
+//!    length to [`GarmentOptions::profile_points`].
+//! 7. **Panels, seams, notches, mirror pairs**: the pieces' faces; their
+//!    grain from the pair of nodes that runs most nearly along the body's
+//!    vertical (no UVs are read yet); seams as the template edges two pieces
+//!    share ([`super::garment_panels::weld_panels`] on the coarse pieces);
+//!    a notch where a girth line crosses a seam; a pair of pieces whose
+//!    nodes mirror each other across the body's sagittal plane within
+//!    [`GarmentOptions::mirror_tolerance_mm`] (mean) is a mirror pair.
+//! 8. **Encoding** by seed 000 Eq. (1) ([`super::codec::encode`]): each node
+//!    tied to its nearest feature point, except that a node within
+//!    [`RING_PLANE_TOLERANCE_M`] of a girth line is never tied to that
+//!    girth's points (it would be taken for a ring node).
+//!
+//! # Failure modes
+//!
+//! [`FromGarmentError`]: the pieces' own errors ([`PanelError`]), a piece
+//! that is no disc and may not (or cannot) be cut, an option out of range,
+//! a body without the hip girth or a landmark the axes need, the
+//! contraction's failure ([`SimplifyError`]), the encoding's
+//! ([`CodecError`]). What authoring could not map is not an error: it is
+//! listed in [`Authored::unmapped`].
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use super::codec::{encode, CodecError, Draft, DraftPanel, DraftSeam};
+use super::format::{GradingDefaults, Template};
+use super::garment_panels::{weld_panels, PanelError, PanelMesh, WeldOptions};
+use super::girth::{girth_plane, ring_curves, RING_PLANE_TOLERANCE_M};
+use crate::body::feature::FeatureBody;
+use crate::body::vocab::{point_def, CurveId, PointId, POINTS};
+use crate::geom::cut::split_by_plane;
+use crate::geom::mesh::{boundary_loops, TriMesh, VertexId};
+use crate::geom::plane::Plane;
+use crate::geom::polyline::{tape_length, Polyline};
+use crate::geom::query::SphereIndex;
+use crate::geom::simplify::{simplify, SimplifyError, SimplifyOptions};
+use crate::geom::slice::slice;
+use crate::geom::topology::UnionFind;
+
+/// How a piece that is not a disc is cut (method, step 2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TubeCut {
+    /// Not at all: such a piece is an error.
+    None,
+    /// By the side plane, then, where still needed, the sagittal plane (default).
+    #[default]
+    Sides,
+    /// By the side plane and the sagittal plane (four pieces from a pair of
+    /// tights: the trousers' left and right fronts and backs).
+    SidesAndCentre,
+}
+
+/// Knobs of [`author_from_garment`]; each documents its default and unit.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct GarmentOptions {
+    /// Welding of the pieces.
+    pub weld: WeldOptions,
+    /// Pieces that are not discs. Default [`TubeCut::Sides`].
+    pub cut: TubeCut,
+    /// Longest outline arc between two nodes, and the scale of the interior
+    /// sampling, mm. Default 90.
+    pub max_edge_mm: f64,
+    /// Interior nodes: every vertex within this fraction of `max_edge_mm`
+    /// of a node (dimensionless). Default 0.6.
+    pub interior_spacing: f64,
+    /// An outline turning by more than this is a corner, degrees. Default 35.
+    pub corner_angle_deg: f64,
+    /// The turning is measured between the chords to the outline points
+    /// this far on either side, mm. Default 15.
+    pub corner_span_mm: f64,
+    /// A seam or hem crossing a girth line within this distance of a ring
+    /// node replaces it, mm. Default 30.
+    pub ring_merge_mm: f64,
+    /// Vertices within this distance of a cutting plane are moved onto it,
+    /// mm. Default 0.5.
+    pub snap_mm: f64,
+    /// Points per profile (both nodes included). Default 7.
+    pub profile_points: usize,
+    /// Mean distance of mirrored nodes below which two pieces are a
+    /// mirror pair, mm. Default 5.
+    pub mirror_tolerance_mm: f64,
+    /// A piece none of whose nodes lies within this distance of a feature
+    /// point is reported unmapped, mm. Default 250.
+    pub max_tie_mm: f64,
+    /// Extra nodes the caller wants kept, m (snapped to the nearest vertex).
+    pub nodes: Vec<[f64; 3]>,
+    /// Grading defaults stored with the template.
+    pub defaults: GradingDefaults,
+}
+
+impl Default for GarmentOptions {
+    fn default() -> Self {
+        Self {
+            weld: WeldOptions::default(),
+            cut: TubeCut::Sides,
+            max_edge_mm: 90.0,
+            interior_spacing: 0.6,
+            corner_angle_deg: 35.0,
+            corner_span_mm: 15.0,
+            ring_merge_mm: 30.0,
+            snap_mm: 0.5,
+            profile_points: 7,
+            mirror_tolerance_mm: 5.0,
+            max_tie_mm: 250.0,
+            nodes: Vec::new(),
+            defaults: GradingDefaults::default(),
+        }
+    }
+}
+
+/// Why authoring from a garment failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum FromGarmentError {
+    /// The pieces could not be welded.
+    #[error(transparent)]
+    Panels(#[from] PanelError),
+    /// A piece is not a disc and cutting is off or did not make it one.
+    #[error("piece `{panel}` is not a disc ({boundaries} outline loops, Euler characteristic {euler}): it cannot be laid flat; cut it into pieces, or allow `cut`")]
+    NotADisc {
+        /// The piece.
+        panel: String,
+        /// Its boundary loops.
+        boundaries: usize,
+        /// `V − E + F`.
+        euler: i64,
+    },
+    /// An option is out of range.
+    #[error("option `{name}` = {value} is out of range ({expected})")]
+    Option {
+        /// The option.
+        name: &'static str,
+        /// Its value.
+        value: f64,
+        /// What it must be.
+        expected: &'static str,
+    },
+    /// The body lacks what the axes need.
+    #[error("the design body lacks `{0}`")]
+    Body(String),
+    /// The cut garment is not a valid surface (a degenerate piece).
+    #[error("the garment surface is invalid: {0}")]
+    Surface(String),
+    /// The contraction failed.
+    #[error("simplification of the garment failed: {0}")]
+    Simplify(#[from] SimplifyError),
+    /// The encoding failed.
+    #[error(transparent)]
+    Codec(#[from] CodecError),
+}
+
+/// Something authoring could not map (the response lists them).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Unmapped {
+    /// No node of the piece lies near a feature point: it follows the
+    /// body loosely.
+    FarPiece {
+        /// The piece.
+        panel: String,
+        /// Its nearest node's distance to a feature point, mm.
+        distance_mm: f64,
+    },
+    /// A girth line crossed by a seam or hem away from every ring node:
+    /// the girth is not refitted on other bodies.
+    BrokenRing {
+        /// The girth.
+        girth: String,
+        /// Crossings away from ring nodes.
+        crossings: usize,
+    },
+    /// A leg girth found on one leg only.
+    OneSidedGirth {
+        /// The girth.
+        girth: String,
+    },
+    /// A listed node farther than `max_edge_mm` from the garment.
+    FarNode {
+        /// Its index in the options' `nodes`.
+        index: usize,
+        /// Distance, mm.
+        distance_mm: f64,
+    },
+}
+
+/// What [`author_from_garment`] made.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Authored {
+    /// The template (version 1).
+    pub template: Template,
+    /// The garment's surface as authoring cut it (metres): what the
+    /// round trip compares a grade against.
+    pub surface: TriMesh,
+    /// What could not be mapped.
+    pub unmapped: Vec<Unmapped>,
+    /// The girths found and their ease, mm.
+    pub girths: BTreeMap<String, f64>,
+    /// Pieces after cutting.
+    pub pieces: Vec<String>,
+}
+
+/// The garment as a labelled triangle soup while it is cut.
+#[derive(Debug, Clone)]
+struct Soup {
+    positions: Vec<DVec3>,
+    triangles: Vec<[u32; 3]>,
+    panel: Vec<usize>,
+    names: Vec<String>,
+}
+
+impl Soup {
+    /// Cuts every triangle the plane crosses; returns each new triangle's side.
+    fn split(&mut self, plane: &Plane, snap: f64) -> Vec<i8> {
+        let s = split_by_plane(&self.positions, &self.triangles, plane, snap);
+        self.positions = s.positions;
+        self.panel = s.parent.iter().map(|&f| self.panel[f as usize]).collect();
+        self.triangles = s.triangles;
+        s.side
+    }
+}
+
+/// Disc test of a set of triangles: one outline loop, `V − E + F = 1`.
+fn disc(tris: &[[u32; 3]]) -> (bool, usize, i64) {
+    let mut verts = BTreeSet::new();
+    let mut edges = BTreeSet::new();
+    for t in tris {
+        for k in 0..3 {
+            verts.insert(t[k]);
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            edges.insert((a.min(b), a.max(b)));
+        }
+    }
+    let euler = verts.len() as i64 - edges.len() as i64 + tris.len() as i64;
+    let loops = boundary_loops(tris).len();
+    (euler == 1 && loops == 1, loops, euler)
+}
+
+/// Connected components of the faces `fs` (sharing an edge).
+fn components(tris: &[[u32; 3]], fs: &[usize]) -> Vec<Vec<usize>> {
+    components_blocked(tris, fs, &BTreeSet::new())
+}
+
+/// Connected components of the faces `fs`, not joined across `blocked` edges.
+fn components_blocked(tris: &[[u32; 3]], fs: &[usize], blocked: &BTreeSet<(u32, u32)>) -> Vec<Vec<usize>> {
+    let mut uf = UnionFind::new(fs.len());
+    let mut by_edge: BTreeMap<(u32, u32), usize> = BTreeMap::new();
+    for (k, &f) in fs.iter().enumerate() {
+        let t = tris[f];
+        for i in 0..3 {
+            let (a, b) = (t[i], t[(i + 1) % 3]);
+            if blocked.contains(&(a.min(b), a.max(b))) {
+                continue;
+            }
+            if let Some(&o) = by_edge.get(&(a.min(b), a.max(b))) {
+                uf.union(k as u32, o as u32);
+            } else {
+                by_edge.insert((a.min(b), a.max(b)), k);
+            }
+        }
+    }
+    let mut groups: BTreeMap<u32, Vec<usize>> = BTreeMap::new();
+    for (k, &f) in fs.iter().enumerate() {
+        groups.entry(uf.find(k as u32)).or_default().push(f);
+    }
+    groups.into_values().collect()
+}
+
+/// The body's axes: up, left, front (unit) and the hip girth's centroid.
+#[derive(Debug, Clone, Copy)]
+struct Axes {
+    up: DVec3,
+    left: DVec3,
+    front: DVec3,
+    centre: DVec3,
+}
+
+fn axes(body: &FeatureBody) -> Result<Axes, FromGarmentError> {
+    let point =
+        |p: PointId| body.points.get(&p).map(|q| q.position).ok_or_else(|| FromGarmentError::Body(p.to_string()));
+    let hip = body.curves.get(&CurveId::Hip).ok_or_else(|| FromGarmentError::Body(CurveId::Hip.to_string()))?;
+    let centre = hip.polyline.centroid();
+    let plane = girth_plane(body, CurveId::Hip).ok_or_else(|| FromGarmentError::Body("hip girth plane".into()))?;
+    let neck = point(PointId::NeckBack)?;
+    let up = if plane.normal.dot(neck - centre) >= 0.0 { plane.normal } else { -plane.normal };
+    let side = point(PointId::HipLeft)? - point(PointId::HipRight)?;
+    let left = (side - up * side.dot(up)).normalize_or_zero();
+    if left == DVec3::ZERO {
+        return Err(FromGarmentError::Body("hip_left apart from hip_right".into()));
+    }
+    Ok(Axes { up, left, front: left.cross(up), centre })
+}
+
+/// A girth line found on the garment.
+#[derive(Debug, Clone)]
+struct RingLine {
+    curve: CurveId,
+    name: &'static str,
+    plane: Plane,
+    /// The section loop, soup vertices in order.
+    vertices: Vec<u32>,
+    ease_mm: f64,
+}
+
+/// The closed loops of on-plane edges between triangles on opposite sides.
+fn cut_loops(tris: &[[u32; 3]], side: &[i8]) -> Vec<Vec<u32>> {
+    let mut edge_sides: BTreeMap<(u32, u32), Vec<i8>> = BTreeMap::new();
+    for (t, &s) in tris.iter().zip(side) {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            edge_sides.entry((a.min(b), a.max(b))).or_default().push(s);
+        }
+    }
+    let cut: Vec<(u32, u32)> =
+        edge_sides.iter().filter(|(_, s)| s.len() == 2 && s[0] * s[1] < 0).map(|(&e, _)| e).collect();
+    let mut adjacent: BTreeMap<u32, Vec<u32>> = BTreeMap::new();
+    for &(a, b) in &cut {
+        adjacent.entry(a).or_default().push(b);
+        adjacent.entry(b).or_default().push(a);
+    }
+    let mut seen = BTreeSet::new();
+    let mut loops = Vec::new();
+    for &start in adjacent.keys() {
+        if seen.contains(&start) || adjacent[&start].len() != 2 {
+            continue;
+        }
+        let mut chain = vec![start];
+        seen.insert(start);
+        let mut prev = start;
+        let mut cur = adjacent[&start][0];
+        let closed = loop {
+            if cur == start {
+                break true;
+            }
+            if seen.contains(&cur) || adjacent[&cur].len() != 2 {
+                break false;
+            }
+            seen.insert(cur);
+            chain.push(cur);
+            let next = if adjacent[&cur][0] == prev { adjacent[&cur][1] } else { adjacent[&cur][0] };
+            prev = cur;
+            cur = next;
+        };
+        if closed && chain.len() >= 3 {
+            loops.push(chain);
+        }
+    }
+    loops
+}
+
+/// The garment's section loop around the body curve `curve` (a girth, an
+/// armscye) in its plane: a closed loop of the soup cut by the plane that
+/// encloses the curve's centroid and no other part of the body in that
+/// plane. Returns the cut soup, the loop (soup vertices) and the plane;
+/// `None` where the garment does not go around the curve.
+fn section_loop(soup: &Soup, body: &FeatureBody, curve: CurveId, snap: f64) -> Option<(Soup, Vec<u32>, Plane)> {
+    let plane = girth_plane(body, curve)?;
+    let g_centre = body.curves.get(&curve)?.polyline.centroid();
+    // quick reject: the garment must reach the plane on both sides
+    let (mut lo, mut hi) = (f64::MAX, f64::MIN);
+    for p in &soup.positions {
+        let d = plane.signed_distance(*p);
+        lo = lo.min(d);
+        hi = hi.max(d);
+    }
+    if lo > -snap || hi < snap {
+        return None;
+    }
+    let mut trial = soup.clone();
+    let side = trial.split(&plane, snap);
+    let loops = cut_loops(&trial.triangles, &side);
+    let body_loops: Vec<Polyline> =
+        slice(&body.mesh, &plane).into_iter().map(|s| s.polyline).filter(|p| p.closed).collect();
+    let own = body_loops
+        .iter()
+        .enumerate()
+        .min_by(|a, b| a.1.centroid().distance(g_centre).total_cmp(&b.1.centroid().distance(g_centre)))?
+        .0;
+    let chosen = loops.into_iter().find(|l| {
+        let poly = Polyline::new(l.iter().map(|&v| trial.positions[v as usize]).collect(), true);
+        poly.contains_projected(&plane, g_centre)
+            && body_loops
+                .iter()
+                .enumerate()
+                .filter(|(k, _)| *k != own)
+                .all(|(_, b)| !poly.contains_projected(&plane, b.centroid()))
+    })?;
+    Some((trial, chosen, plane))
+}
+
+/// Finds the garment's crossing with the girth `curve` (method, step 3) and
+/// cuts the soup there; `None` (soup unchanged) where the garment does not
+/// go around it.
+fn ring_line(soup: &mut Soup, body: &FeatureBody, curve: CurveId, name: &'static str, snap: f64) -> Option<RingLine> {
+    let (trial, vertices, plane) = section_loop(soup, body, curve, snap)?;
+    let girth = &body.curves.get(&curve)?.polyline;
+    let poly = Polyline::new(vertices.iter().map(|&v| trial.positions[v as usize]).collect(), true);
+    let ease_mm = (tape_length(&[&poly], &plane) - tape_length(&[girth], &plane)) * 1e3;
+    *soup = trial;
+    Some(RingLine { curve, name, plane, vertices, ease_mm })
+}
+
+/// Authors a template named `name` from `pieces` draped on `body`
+/// (module docs).
+///
+/// # Errors
+/// [`FromGarmentError`].
+pub fn author_from_garment(
+    name: &str,
+    pieces: &[PanelMesh],
+    body: &FeatureBody,
+    opts: &GarmentOptions,
+) -> Result<Authored, FromGarmentError> {
+    check(opts)?;
+    let ax = axes(body)?;
+    let welded = weld_panels(pieces, &opts.weld)?;
+    let mut soup = Soup {
+        positions: welded.positions.clone(),
+        triangles: welded.triangles.clone(),
+        panel: welded.face_panel.clone(),
+        names: welded.names.clone(),
+    };
+    let snap = opts.snap_mm * 1e-3;
+    cut_tubes(&mut soup, body, &ax, opts.cut, snap)?;
+
+    // girth lines
+    let mut rings: Vec<RingLine> = Vec::new();
+    let mut girths: BTreeMap<String, f64> = BTreeMap::new();
+    let mut unmapped = Vec::new();
+    for gname in ["neck_base", "chest", "bust", "underbust", "waist", "hip", "thigh", "knee"] {
+        let mut found = Vec::new();
+        for &curve in ring_curves(gname) {
+            if let Some(r) = ring_line(&mut soup, body, curve, gname, snap) {
+                found.push(r);
+            }
+        }
+        if found.is_empty() {
+            continue;
+        }
+        if found.len() < ring_curves(gname).len() {
+            unmapped.push(Unmapped::OneSidedGirth { girth: gname.to_owned() });
+        }
+        let ease = found.iter().map(|r| r.ease_mm).sum::<f64>() / found.len() as f64;
+        girths.insert(gname.to_owned(), (ease * 10.0).round() / 10.0);
+        rings.extend(found);
+    }
+
+    // faces by piece and band: adjacency blocked at seams and girth lines
+    let ring_edges: BTreeSet<(u32, u32)> = rings
+        .iter()
+        .flat_map(|r| {
+            let n = r.vertices.len();
+            (0..n).map(move |k| {
+                let (a, b) = (r.vertices[k], r.vertices[(k + 1) % n]);
+                (a.min(b), a.max(b))
+            })
+        })
+        .collect();
+    let bands = bands(&soup, &ring_edges);
+
+    // nodes
+    let mut nodes = NodeSet::default();
+    let mut notches: Vec<(String, u32)> = Vec::new();
+    let outline = outline_kinds(&soup, &ring_edges);
+    for r in &rings {
+        ring_nodes(r, body, &soup, &outline, opts, &mut nodes, &mut notches, &mut unmapped);
+    }
+    outline_nodes(&soup, &bands, &outline, opts, &mut nodes);
+    for (index, p) in opts.nodes.iter().enumerate() {
+        let p = DVec3::from_array(*p);
+        let (v, d) = nearest_vertex(&soup.positions, p);
+        if d > opts.max_edge_mm * 1e-3 {
+            unmapped.push(Unmapped::FarNode { index, distance_mm: d * 1e3 });
+        } else {
+            nodes.add(v, None);
+        }
+    }
+    interior_nodes(&soup, &bands, opts, &mut nodes);
+
+    // topology: each band its own component, the nodes locked
+    // (a band too narrow for its nodes contracts to a triangle another band
+    // also has, or an edge of three bands: it gets its farthest vertex as a
+    // node too, and is contracted again)
+    let (coarse, coarse_panel) = loop {
+        let c = contract(&soup, &bands, &nodes)?;
+        let crowded = crowded_bands(&c.triangles, &c.band);
+        if crowded.is_empty() || nodes.order.len() >= soup.positions.len() {
+            break (c.triangles, c.panel);
+        }
+        let before = nodes.order.len();
+        for band in crowded {
+            farthest_vertex(&soup, &bands, band, &mut nodes);
+        }
+        if nodes.order.len() == before {
+            break (c.triangles, c.panel);
+        }
+    };
+
+    // node ids in the template: order of `nodes`
+    let node_of: BTreeMap<u32, u32> = nodes.order.iter().enumerate().map(|(i, &v)| (v, i as u32)).collect();
+    let positions: Vec<DVec3> = nodes.order.iter().map(|&v| soup.positions[v as usize]).collect();
+    let triangles: Vec<[u32; 3]> = coarse.iter().map(|t| t.map(|v| node_of[&v])).collect();
+
+    // profiles
+    let surface = soup_mesh(&soup)?;
+    let index = SphereIndex::new(&surface);
+    let chains = outline_chains(&soup, &bands, &nodes);
+    let mut profiles = Vec::new();
+    let mut done = BTreeSet::new();
+    for t in &triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            if !done.insert((a.min(b), a.max(b))) {
+                continue;
+            }
+            let (va, vb) = (nodes.order[a as usize], nodes.order[b as usize]);
+            let dense: Vec<DVec3> = match chains.get(&(va, vb)) {
+                Some(c) => c.iter().map(|&v| soup.positions[v as usize]).collect(),
+                None => match chains.get(&(vb, va)) {
+                    Some(c) => c.iter().rev().map(|&v| soup.positions[v as usize]).collect(),
+                    None => {
+                        let (pa, pb) = (positions[a as usize], positions[b as usize]);
+                        let n = opts.profile_points.max(2) * 2;
+                        (0..=n)
+                            .map(|i| {
+                                let x = pa.lerp(pb, i as f64 / n as f64);
+                                if i == 0 || i == n {
+                                    x
+                                } else {
+                                    index.closest_point(&surface, x).point
+                                }
+                            })
+                            .collect()
+                    }
+                },
+            };
+            profiles.push(((a, b), resample(&dense, opts.profile_points.max(2))));
+        }
+    }
+
+    // pieces of the coarse mesh, seams between them
+    let piece_names: Vec<String> = soup.names.clone();
+    let mut coarse_pieces: Vec<PanelMesh> = Vec::new();
+    let mut piece_triangles: Vec<Vec<usize>> = Vec::new();
+    let mut kept_names = Vec::new();
+    for (pi, pname) in piece_names.iter().enumerate() {
+        let tris: Vec<usize> = (0..triangles.len()).filter(|&f| coarse_panel[f] == pi).collect();
+        if tris.is_empty() {
+            continue;
+        }
+        coarse_pieces.push(PanelMesh {
+            name: pname.clone(),
+            positions: positions.clone(),
+            triangles: tris.iter().map(|&f| triangles[f]).collect(),
+        });
+        piece_triangles.push(tris);
+        kept_names.push(pname.clone());
+    }
+    let cw = weld_panels(&coarse_pieces, &WeldOptions { tolerance_mm: 1e-6 })?;
+    // welded id → node id (every piece lists all nodes, so piece 0's map covers them)
+    let mut node_of_welded: BTreeMap<u32, u32> = BTreeMap::new();
+    for map in &cw.welded {
+        for (node, &w) in map.iter().enumerate() {
+            node_of_welded.entry(w).or_insert(node as u32);
+        }
+    }
+    let mut seam_count: BTreeMap<[usize; 2], usize> = BTreeMap::new();
+    let mut seams = Vec::new();
+    for s in &cw.seams {
+        let n = seam_count.entry(s.panels).or_default();
+        *n += 1;
+        let mut chain: Vec<u32> = s.chain.iter().map(|w| node_of_welded[w]).collect();
+        if s.closed {
+            chain.push(chain[0]);
+        }
+        let (a, b) = (&kept_names[s.panels[0]], &kept_names[s.panels[1]]);
+        seams.push(DraftSeam { name: format!("{a}+{b}-{n}"), panel_a: a.clone(), panel_b: b.clone(), nodes: chain });
+    }
+    let seam_nodes: BTreeSet<u32> = seams.iter().flat_map(|s| s.nodes.iter().copied()).collect();
+    let notches: Vec<(String, u32)> = notches
+        .into_iter()
+        .filter_map(|(n, v)| node_of.get(&v).map(|&i| (n, i)))
+        .filter(|(_, i)| seam_nodes.contains(i))
+        .collect();
+
+    let panels: Vec<DraftPanel> = kept_names
+        .iter()
+        .zip(&piece_triangles)
+        .map(|(n, tris)| DraftPanel {
+            name: n.clone(),
+            triangles: tris.clone(),
+            grain: grain(tris, &triangles, &positions, &ax),
+            quantity: 1,
+        })
+        .collect();
+    let mirror_pairs = mirror_pairs(&panels, &triangles, &positions, &ax, opts.mirror_tolerance_mm * 1e-3);
+
+    // ties
+    let ring_tie: BTreeMap<u32, PointId> =
+        nodes.ties.iter().filter_map(|(&v, t)| t.map(|p| (node_of[&v], p))).collect();
+    let mut ties = Vec::with_capacity(positions.len());
+    for (i, &p) in positions.iter().enumerate() {
+        ties.push(Some(match ring_tie.get(&(i as u32)) {
+            Some(&t) => t,
+            None => free_tie(p, body, &rings).ok_or_else(|| FromGarmentError::Body("feature points".into()))?,
+        }));
+    }
+    for (pi, panel) in panels.iter().enumerate() {
+        let near = panel
+            .triangles
+            .iter()
+            .flat_map(|&f| triangles[f])
+            .filter_map(|v| {
+                let t = ties[v as usize]?;
+                Some(body.points[&t].position.distance(positions[v as usize]))
+            })
+            .fold(f64::MAX, f64::min);
+        if near > opts.max_tie_mm * 1e-3 {
+            unmapped.push(Unmapped::FarPiece { panel: kept_names[pi].clone(), distance_mm: near * 1e3 });
+        }
+    }
+
+    let draft = Draft {
+        name: name.to_owned(),
+        version: 1,
+        description: format!(
+            "authored from a garment of {} piece(s) ({} after cutting) by grade3d",
+            pieces.len(),
+            kept_names.len()
+        ),
+        ease_mm: girths.clone(),
+        positions,
+        ties,
+        triangles,
+        profiles,
+        panels,
+        seams,
+        notches,
+        darts: Vec::new(),
+        drops: Vec::new(),
+        on_curve: Vec::new(),
+        hangs: Vec::new(),
+        mirror_pairs,
+        defaults: opts.defaults.clone(),
+    };
+    let template = encode(&draft, body)?;
+    Ok(Authored { template, surface, unmapped, girths, pieces: kept_names })
+}
+
+fn check(opts: &GarmentOptions) -> Result<(), FromGarmentError> {
+    let positive = |name: &'static str, value: f64| {
+        if value.is_finite() && value > 0.0 {
+            Ok(())
+        } else {
+            Err(FromGarmentError::Option { name, value, expected: "positive and finite" })
+        }
+    };
+    positive("max_edge_mm", opts.max_edge_mm)?;
+    positive("interior_spacing", opts.interior_spacing)?;
+    positive("corner_angle_deg", opts.corner_angle_deg)?;
+    positive("corner_span_mm", opts.corner_span_mm)?;
+    positive("ring_merge_mm", opts.ring_merge_mm)?;
+    positive("snap_mm", opts.snap_mm)?;
+    positive("mirror_tolerance_mm", opts.mirror_tolerance_mm)?;
+    positive("max_tie_mm", opts.max_tie_mm)?;
+    if opts.profile_points < 2 || opts.profile_points > 64 {
+        return Err(FromGarmentError::Option {
+            name: "profile_points",
+            value: opts.profile_points as f64,
+            expected: "2 to 64",
+        });
+    }
+    if let Some(p) = opts.nodes.iter().find(|p| !p.iter().all(|x| x.is_finite())) {
+        return Err(FromGarmentError::Option { name: "nodes", value: p[0], expected: "finite positions" });
+    }
+    Ok(())
+}
+
+/// The triangles of piece `p`.
+fn piece_triangles(soup: &Soup, p: usize) -> Vec<[u32; 3]> {
+    soup.triangles.iter().zip(&soup.panel).filter(|(_, &q)| q == p).map(|(t, _)| *t).collect()
+}
+
+/// Step 2: pieces that are not discs lose their sleeves at the armscyes,
+/// then are cut by the side plane and, where still needed (or asked), the
+/// sagittal plane.
+fn cut_tubes(soup: &mut Soup, body: &FeatureBody, ax: &Axes, cut: TubeCut, snap: f64) -> Result<(), FromGarmentError> {
+    let not_a_disc = |soup: &Soup, names: &[String], p: usize| {
+        let (_, boundaries, euler) = disc(&piece_triangles(soup, p));
+        FromGarmentError::NotADisc { panel: names[p].clone(), boundaries, euler }
+    };
+    let mut names: Vec<String> = soup.names.clone();
+    if cut == TubeCut::None {
+        if let Some(p) = (0..names.len()).find(|&p| !disc(&piece_triangles(soup, p)).0) {
+            return Err(not_a_disc(soup, &names, p));
+        }
+        return Ok(());
+    }
+    // sleeves: a piece going around an armscye is cut along it
+    for p in 0..names.len() {
+        for (curve, label, sign) in
+            [(CurveId::ArmscyeLeft, "left-sleeve", 1.0), (CurveId::ArmscyeRight, "right-sleeve", -1.0)]
+        {
+            if disc(&piece_triangles(soup, p)).0 {
+                break;
+            }
+            let Some((trial, vertices, _)) = section_loop(soup, body, curve, snap) else { continue };
+            let n = vertices.len();
+            let blocked: BTreeSet<(u32, u32)> = (0..n)
+                .map(|k| {
+                    let (a, b) = (vertices[k], vertices[(k + 1) % n]);
+                    (a.min(b), a.max(b))
+                })
+                .collect();
+            let faces: Vec<usize> = (0..trial.triangles.len()).filter(|&f| trial.panel[f] == p).collect();
+            // the loop must belong to this piece
+            let mine: BTreeSet<u32> = faces.iter().flat_map(|&f| trial.triangles[f]).collect();
+            if !vertices.iter().all(|v| mine.contains(v)) {
+                continue;
+            }
+            let comps = components_blocked(&trial.triangles, &faces, &blocked);
+            if comps.len() != 2 {
+                continue;
+            }
+            let reach = |c: &Vec<usize>| {
+                let (sum, count) = c
+                    .iter()
+                    .flat_map(|&f| trial.triangles[f])
+                    .fold((DVec3::ZERO, 0usize), |(s, k), v| (s + trial.positions[v as usize], k + 1));
+                sign * (sum / count.max(1) as f64 - ax.centre).dot(ax.left)
+            };
+            let sleeve = if reach(&comps[0]) >= reach(&comps[1]) { &comps[0] } else { &comps[1] };
+            *soup = trial.clone();
+            names.push(format!("{}-{label}", names[p]));
+            let id = names.len() - 1;
+            for &f in sleeve {
+                soup.panel[f] = id;
+            }
+        }
+    }
+    // the side plane of each piece its own ([`side_plane`]); the sagittal
+    // plane through the hip centre
+    let axis = |normal: DVec3| Plane::from_point_normal(ax.centre, normal).ok_or(FromGarmentError::Body("axes".into()));
+    let planes: [(Plane, [&str; 2]); 2] = [(axis(ax.front)?, ["front", "back"]), (axis(ax.left)?, ["left", "right"])];
+    for (k, (plane, labels)) in planes.iter().enumerate() {
+        for p in 0..names.len() {
+            let tris = piece_triangles(soup, p);
+            if tris.is_empty() || (disc(&tris).0 && !(k == 1 && cut == TubeCut::SidesAndCentre)) {
+                continue;
+            }
+            let candidates: Vec<(Plane, [&str; 2])> =
+                if k == 0 { side_planes(soup, &tris, ax) } else { vec![(*plane, *labels)] };
+            // the first candidate whose halves are discs, else the first that cuts
+            let mut chosen = None;
+            for (plane, labels) in &candidates {
+                let mut trial = soup.clone();
+                let side = trial.split(plane, snap);
+                let faces: Vec<usize> = (0..trial.triangles.len()).filter(|&f| trial.panel[f] == p).collect();
+                let plus: Vec<usize> = faces.iter().copied().filter(|&f| side[f] >= 0).collect();
+                let minus: Vec<usize> = faces.iter().copied().filter(|&f| side[f] < 0).collect();
+                if plus.is_empty() || minus.is_empty() {
+                    continue;
+                }
+                let discs = [&plus, &minus].iter().all(|fs| {
+                    components(&trial.triangles, fs)
+                        .iter()
+                        .all(|c| disc(&c.iter().map(|&f| trial.triangles[f]).collect::<Vec<_>>()).0)
+                });
+                if chosen.is_none() || discs {
+                    chosen = Some((trial, plus, minus, *labels));
+                }
+                if discs {
+                    break;
+                }
+            }
+            let Some((trial, plus, minus, labels)) = chosen else { continue };
+            *soup = trial;
+            let base = names[p].clone();
+            for (faces, label) in [(plus, labels[0]), (minus, labels[1])] {
+                let comps = components(&soup.triangles, &faces);
+                let many = comps.len() > 1;
+                for (c, comp) in comps.into_iter().enumerate() {
+                    names.push(if many { format!("{base}-{label}-{}", c + 1) } else { format!("{base}-{label}") });
+                    let id = names.len() - 1;
+                    for f in comp {
+                        soup.panel[f] = id;
+                    }
+                }
+            }
+        }
+    }
+    // drop the names of pieces that were cut, renumber; every piece a disc
+    let used: BTreeSet<usize> = soup.panel.iter().copied().collect();
+    if let Some(&p) = used.iter().find(|&&p| !disc(&piece_triangles(soup, p)).0) {
+        return Err(not_a_disc(soup, &names, p));
+    }
+    let renumber: BTreeMap<usize, usize> = used.iter().enumerate().map(|(i, &p)| (p, i)).collect();
+    soup.names = used.iter().map(|&p| names[p].clone()).collect();
+    for p in &mut soup.panel {
+        *p = renumber[p];
+    }
+    Ok(())
+}
+
+/// The planes a tube may be cut in two by, in order of preference. A piece
+/// with two outline loops (a skirt, a sleeve) has an axis, the line between
+/// the loops' centroids: first the plane through it whose normal is the
+/// body's front axis made perpendicular to it (front and back), then the
+/// plane through it perpendicular to that one (`upper` and `under`: a
+/// sleeve whose forearm bends forward, as MakeHuman's A pose has it, the
+/// wrist 16 cm in front of the armscye, is missed at the elbow by the
+/// first). Any other piece: the plane through its area centroid, normal the
+/// front axis.
+fn side_planes(soup: &Soup, tris: &[[u32; 3]], ax: &Axes) -> Vec<(Plane, [&'static str; 2])> {
+    let loops = boundary_loops(tris);
+    let centroid = |l: &Vec<u32>| l.iter().map(|&v| soup.positions[v as usize]).sum::<DVec3>() / l.len().max(1) as f64;
+    let mut out = Vec::new();
+    if let [a, b] = &loops[..] {
+        let (ca, cb) = (centroid(a), centroid(b));
+        let axis = (cb - ca).normalize_or_zero();
+        let n = (ax.front - axis * ax.front.dot(axis)).normalize_or_zero();
+        if axis != DVec3::ZERO && n.length_squared() > 0.5 {
+            let mid = (ca + cb) * 0.5;
+            out.extend(Plane::from_point_normal(mid, n).map(|p| (p, ["front", "back"])));
+            let m = n.cross(axis);
+            let m = if m.dot(ax.up) >= 0.0 { m } else { -m };
+            out.extend(Plane::from_point_normal(mid, m).map(|p| (p, ["upper", "under"])));
+        }
+    }
+    let (sum, area) = tris.iter().fold((DVec3::ZERO, 0.0), |(s, w), t| {
+        let [a, b, c] = t.map(|v| soup.positions[v as usize]);
+        let area = (b - a).cross(c - a).length();
+        (s + (a + b + c) / 3.0 * area, w + area)
+    });
+    out.extend(
+        Plane::from_point_normal(if area > 0.0 { sum / area } else { ax.centre }, ax.front)
+            .map(|p| (p, ["front", "back"])),
+    );
+    out
+}
+
+/// Bands: connected faces of one piece, not crossing a girth line.
+fn bands(soup: &Soup, ring_edges: &BTreeSet<(u32, u32)>) -> Vec<usize> {
+    let n = soup.triangles.len();
+    let mut uf = UnionFind::new(n);
+    let mut by_edge: BTreeMap<(u32, u32), usize> = BTreeMap::new();
+    for (f, t) in soup.triangles.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            let e = (a.min(b), a.max(b));
+            if let Some(&o) = by_edge.get(&e) {
+                if soup.panel[o] == soup.panel[f] && !ring_edges.contains(&e) {
+                    uf.union(f as u32, o as u32);
+                }
+            } else {
+                by_edge.insert(e, f);
+            }
+        }
+    }
+    let mut ids: BTreeMap<u32, usize> = BTreeMap::new();
+    (0..n)
+        .map(|f| {
+            let r = uf.find(f as u32);
+            let next = ids.len();
+            *ids.entry(r).or_insert(next)
+        })
+        .collect()
+}
+
+/// What each undirected soup edge on an outline runs along: a seam to
+/// another piece, a hem (free), or a girth line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+enum Along {
+    Seam(usize, usize),
+    Free(usize),
+    Ring,
+}
+
+fn outline_kinds(soup: &Soup, ring_edges: &BTreeSet<(u32, u32)>) -> BTreeMap<(u32, u32), Along> {
+    let mut faces: BTreeMap<(u32, u32), Vec<usize>> = BTreeMap::new();
+    for (f, t) in soup.triangles.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            faces.entry((a.min(b), a.max(b))).or_default().push(f);
+        }
+    }
+    let mut out = BTreeMap::new();
+    for (e, fs) in faces {
+        let kind = match fs[..] {
+            [f] => Some(Along::Free(soup.panel[f])),
+            [f, g] if soup.panel[f] != soup.panel[g] => {
+                let (p, q) = (soup.panel[f], soup.panel[g]);
+                Some(Along::Seam(p.min(q), p.max(q)))
+            }
+            _ if ring_edges.contains(&e) => Some(Along::Ring),
+            _ => None,
+        };
+        if let Some(k) = kind {
+            out.insert(e, k);
+        }
+    }
+    out
+}
+
+/// The chosen nodes (soup vertices) in order, with the ring nodes' ties.
+#[derive(Debug, Clone, Default)]
+struct NodeSet {
+    order: Vec<u32>,
+    ties: BTreeMap<u32, Option<PointId>>,
+}
+
+impl NodeSet {
+    fn add(&mut self, v: u32, tie: Option<PointId>) {
+        match self.ties.get_mut(&v) {
+            Some(t) => {
+                if t.is_none() {
+                    *t = tie;
+                }
+            }
+            None => {
+                self.order.push(v);
+                self.ties.insert(v, tie);
+            }
+        }
+    }
+    fn contains(&self, v: u32) -> bool {
+        self.ties.contains_key(&v)
+    }
+}
+
+/// Ring nodes of one girth line (method, step 4, first item).
+#[expect(clippy::too_many_arguments, reason = "one step of author_from_garment, its state passed in")]
+fn ring_nodes(
+    r: &RingLine,
+    body: &FeatureBody,
+    soup: &Soup,
+    outline: &BTreeMap<(u32, u32), Along>,
+    opts: &GarmentOptions,
+    nodes: &mut NodeSet,
+    notches: &mut Vec<(String, u32)>,
+    unmapped: &mut Vec<Unmapped>,
+) {
+    let Some(curve) = body.curves.get(&r.curve) else { return };
+    let centre = curve.polyline.centroid();
+    let (e1, e2) = r.plane.basis();
+    let angle = |p: DVec3| {
+        let d = p - centre;
+        d.dot(e2).atan2(d.dot(e1))
+    };
+    // section vertices where a seam or hem meets the line
+    let on_outline: BTreeSet<u32> =
+        outline.iter().filter(|(_, k)| !matches!(k, Along::Ring)).flat_map(|(e, _)| [e.0, e.1]).collect();
+    let crossings: Vec<u32> = r.vertices.iter().copied().filter(|v| on_outline.contains(v)).collect();
+    let mut used_crossings = BTreeSet::new();
+    let points: Vec<PointId> = POINTS
+        .iter()
+        .filter(|d| d.f1 == r.curve || d.f2 == r.curve)
+        .map(|d| d.id)
+        .filter(|p| body.points.contains_key(p))
+        .collect();
+    let wrap = |x: f64| {
+        let t = x.rem_euclid(std::f64::consts::TAU);
+        t.min(std::f64::consts::TAU - t)
+    };
+    for p in points {
+        let q = body.points[&p].position;
+        let a = angle(q);
+        let best = r
+            .vertices
+            .iter()
+            .copied()
+            .min_by(|&x, &y| {
+                wrap(angle(soup.positions[x as usize]) - a).total_cmp(&wrap(angle(soup.positions[y as usize]) - a))
+            })
+            .unwrap_or(r.vertices[0]);
+        // a crossing near it takes its place
+        let near = crossings
+            .iter()
+            .copied()
+            .filter(|&c| {
+                soup.positions[c as usize].distance(soup.positions[best as usize]) <= opts.ring_merge_mm * 1e-3
+            })
+            .min_by(|&x, &y| {
+                let d = |v: u32| soup.positions[v as usize].distance(soup.positions[best as usize]);
+                d(x).total_cmp(&d(y))
+            });
+        let v = match near {
+            Some(c) => {
+                used_crossings.insert(c);
+                c
+            }
+            None => best,
+        };
+        nodes.add(v, Some(p));
+    }
+    let mut broken = 0;
+    for &c in &crossings {
+        notches.push((r.name.to_owned(), c));
+        if !used_crossings.contains(&c) {
+            broken += 1;
+            nodes.add(c, None);
+        }
+    }
+    if broken > 0 {
+        unmapped.push(Unmapped::BrokenRing { girth: r.name.to_owned(), crossings: broken });
+    }
+}
+
+/// The outline loops of every band (soup vertices, in order).
+fn band_loops(soup: &Soup, bands: &[usize]) -> Vec<Vec<u32>> {
+    let mut by_band: BTreeMap<usize, Vec<[u32; 3]>> = BTreeMap::new();
+    for (f, t) in soup.triangles.iter().enumerate() {
+        by_band.entry(bands[f]).or_default().push(*t);
+    }
+    by_band.values().flat_map(|tris| boundary_loops(tris)).collect()
+}
+
+/// Outline nodes (method, step 4, second and third item).
+fn outline_nodes(
+    soup: &Soup,
+    bands: &[usize],
+    outline: &BTreeMap<(u32, u32), Along>,
+    opts: &GarmentOptions,
+    nodes: &mut NodeSet,
+) {
+    let loops = band_loops(soup, bands);
+    let kind = |a: u32, b: u32| outline.get(&(a.min(b), a.max(b))).copied();
+    let span = opts.corner_span_mm * 1e-3;
+    let cos_max = opts.corner_angle_deg.to_radians().cos();
+    for l in &loops {
+        let n = l.len();
+        let p = |k: usize| soup.positions[l[k % n] as usize];
+        // changes of kind
+        for k in 0..n {
+            let before = kind(l[(k + n - 1) % n], l[k]);
+            let after = kind(l[k], l[(k + 1) % n]);
+            if before != after {
+                nodes.add(l[k], None);
+            }
+        }
+        // corners: the chords to the points `span` away on either side
+        for k in 0..n {
+            let here = p(k);
+            let mut i = 1;
+            while i < n / 2 && p(k + n - i).distance(here) < span {
+                i += 1;
+            }
+            let mut j = 1;
+            while j < n / 2 && p(k + j).distance(here) < span {
+                j += 1;
+            }
+            let (u, w) = ((here - p(k + n - i)).normalize_or_zero(), (p(k + j) - here).normalize_or_zero());
+            if u != DVec3::ZERO && w != DVec3::ZERO && u.dot(w) < cos_max {
+                // keep only the sharpest vertex of a corner's neighbourhood
+                let sharper = |m: usize| {
+                    let (a, b) = ((p(m) - p(m + n - 1)).normalize_or_zero(), (p(m + 1) - p(m)).normalize_or_zero());
+                    a.dot(b)
+                };
+                let (lo, hi) = (k + n - i, k + j);
+                let best = (lo..=hi).min_by(|&x, &y| sharper(x).total_cmp(&sharper(y))).unwrap_or(k);
+                nodes.add(l[best % n], None);
+            }
+        }
+    }
+    // spacing along the outline (after every loop's corners, so that a
+    // shared chain is split the same way on both sides)
+    let max = opts.max_edge_mm * 1e-3;
+    for l in &loops {
+        let n = l.len();
+        let at: Vec<usize> = (0..n).filter(|&k| nodes.contains(l[k])).collect();
+        let cum: Vec<f64> = {
+            let mut c = vec![0.0; n + 1];
+            for k in 0..n {
+                c[k + 1] = c[k] + soup.positions[l[k] as usize].distance(soup.positions[l[(k + 1) % n] as usize]);
+            }
+            c
+        };
+        let total = cum[n];
+        let segments: Vec<(usize, f64, f64)> = if at.is_empty() {
+            vec![(0, 0.0, total)]
+        } else {
+            (0..at.len())
+                .map(|i| {
+                    let s0 = cum[at[i]];
+                    let s1 = if i + 1 < at.len() { cum[at[i + 1]] } else { cum[at[0]] + total };
+                    (at[i], s0, s1)
+                })
+                .collect()
+        };
+        let parts_min = if at.len() >= 3 { 1 } else { 3usize.div_ceil(at.len().max(1)) };
+        for (_, s0, s1) in segments {
+            let parts = (((s1 - s0) / max).ceil() as usize).max(parts_min);
+            for m in 1..parts {
+                let s = s0 + (s1 - s0) * m as f64 / parts as f64;
+                let s = if s >= total { s - total } else { s };
+                let k = (0..n).min_by(|&x, &y| (cum[x] - s).abs().total_cmp(&(cum[y] - s).abs())).unwrap_or(0);
+                nodes.add(l[k], None);
+            }
+        }
+    }
+}
+
+/// Interior nodes: farthest-point samples per band (method, step 4).
+fn interior_nodes(soup: &Soup, bands: &[usize], opts: &GarmentOptions, nodes: &mut NodeSet) {
+    let spacing = opts.max_edge_mm * 1e-3 * opts.interior_spacing;
+    let mut band_vertices: BTreeMap<usize, BTreeSet<u32>> = BTreeMap::new();
+    for (f, t) in soup.triangles.iter().enumerate() {
+        band_vertices.entry(bands[f]).or_default().extend(t.iter().copied());
+    }
+    for verts in band_vertices.values() {
+        let verts: Vec<u32> = verts.iter().copied().collect();
+        let mut dist: Vec<f64> = verts
+            .iter()
+            .map(|&v| {
+                let p = soup.positions[v as usize];
+                verts
+                    .iter()
+                    .filter(|&&w| nodes.contains(w))
+                    .map(|&w| soup.positions[w as usize].distance(p))
+                    .fold(f64::MAX, f64::min)
+            })
+            .collect();
+        while let Some((k, &d)) = dist.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1).then(b.0.cmp(&a.0))) {
+            if d <= spacing {
+                break;
+            }
+            let v = verts[k];
+            nodes.add(v, None);
+            let p = soup.positions[v as usize];
+            for (i, &w) in verts.iter().enumerate() {
+                dist[i] = dist[i].min(soup.positions[w as usize].distance(p));
+            }
+        }
+    }
+}
+
+fn nearest_vertex(positions: &[DVec3], p: DVec3) -> (u32, f64) {
+    positions
+        .iter()
+        .enumerate()
+        .map(|(i, q)| (i as u32, q.distance(p)))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .unwrap_or((0, f64::MAX))
+}
+
+fn soup_mesh(soup: &Soup) -> Result<TriMesh, FromGarmentError> {
+    let tris: Vec<[VertexId; 3]> = soup.triangles.iter().map(|t| t.map(VertexId)).collect();
+    TriMesh::new(soup.positions.clone(), tris).map_err(|e| FromGarmentError::Surface(e.to_string()))
+}
+
+/// Bands with a coarse triangle on the same three nodes as another's, or
+/// with an edge used by more than two coarse triangles.
+fn crowded_bands(coarse: &[[u32; 3]], band: &[usize]) -> BTreeSet<usize> {
+    let mut out = BTreeSet::new();
+    let mut by_nodes: BTreeMap<[u32; 3], Vec<usize>> = BTreeMap::new();
+    let mut by_edge: BTreeMap<(u32, u32), Vec<usize>> = BTreeMap::new();
+    for (f, t) in coarse.iter().enumerate() {
+        let mut key = *t;
+        key.sort_unstable();
+        by_nodes.entry(key).or_default().push(f);
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            by_edge.entry((a.min(b), a.max(b))).or_default().push(f);
+        }
+    }
+    for fs in by_nodes.values().filter(|f| f.len() > 1).chain(by_edge.values().filter(|f| f.len() > 2)) {
+        out.extend(fs.iter().map(|&f| band[f]));
+    }
+    out
+}
+
+/// Adds the vertex of `band` farthest from every node as a node.
+fn farthest_vertex(soup: &Soup, bands: &[usize], band: usize, nodes: &mut NodeSet) {
+    let verts: BTreeSet<u32> =
+        soup.triangles.iter().zip(bands).filter(|(_, &b)| b == band).flat_map(|(t, _)| *t).collect();
+    let node_pos: Vec<DVec3> = nodes.order.iter().map(|&v| soup.positions[v as usize]).collect();
+    let far = verts
+        .iter()
+        .filter(|&&v| !nodes.contains(v))
+        .map(|&v| {
+            let p = soup.positions[v as usize];
+            (v, node_pos.iter().map(|q| q.distance(p)).fold(f64::MAX, f64::min))
+        })
+        .max_by(|a, b| a.1.total_cmp(&b.1).then(b.0.cmp(&a.0)));
+    if let Some((v, _)) = far {
+        nodes.add(v, None);
+    }
+}
+
+/// The coarse triangles (soup vertex ids), each one's piece and band.
+struct Contracted {
+    triangles: Vec<[u32; 3]>,
+    panel: Vec<usize>,
+    band: Vec<usize>,
+}
+
+/// Step 5: each band its own component (its own copies of the vertices),
+/// contracted down to the nodes. Returns the coarse triangles in soup
+/// vertex ids and each one's piece and band.
+fn contract(soup: &Soup, bands: &[usize], nodes: &NodeSet) -> Result<Contracted, FromGarmentError> {
+    let mut copy: BTreeMap<(usize, u32), u32> = BTreeMap::new();
+    let mut origin: Vec<u32> = Vec::new();
+    let mut positions = Vec::new();
+    let mut tris = Vec::with_capacity(soup.triangles.len());
+    let mut band_panel: BTreeMap<usize, usize> = BTreeMap::new();
+    for (f, t) in soup.triangles.iter().enumerate() {
+        band_panel.insert(bands[f], soup.panel[f]);
+        let c = t.map(|v| {
+            *copy.entry((bands[f], v)).or_insert_with(|| {
+                positions.push(soup.positions[v as usize]);
+                origin.push(v);
+                (positions.len() - 1) as u32
+            })
+        });
+        tris.push(c.map(VertexId));
+    }
+    let copy_band: Vec<usize> = {
+        let mut b = vec![0; positions.len()];
+        for (&(band, _), &c) in &copy {
+            b[c as usize] = band;
+        }
+        b
+    };
+    let mesh = TriMesh::new(positions, tris).map_err(|e| FromGarmentError::Surface(e.to_string()))?;
+    let locked: Vec<VertexId> =
+        (0..origin.len() as u32).filter(|&c| nodes.contains(origin[c as usize])).map(VertexId).collect();
+    let s = simplify(&mesh, &locked, &SimplifyOptions::default())?;
+    let mut out = Vec::with_capacity(s.mesh.face_count());
+    let mut panel = Vec::with_capacity(s.mesh.face_count());
+    let mut band = Vec::with_capacity(s.mesh.face_count());
+    for t in s.mesh.triangles() {
+        let input = t.map(|v| s.vertex_origin[v.idx()].0);
+        out.push(input.map(|c| origin[c as usize]));
+        band.push(copy_band[input[0] as usize]);
+        panel.push(band_panel[&copy_band[input[0] as usize]]);
+    }
+    Ok(Contracted { triangles: out, panel, band })
+}
+
+/// The dense outline chain between consecutive nodes on every band loop,
+/// keyed by its (first, last) soup vertex, in loop order.
+fn outline_chains(soup: &Soup, bands: &[usize], nodes: &NodeSet) -> BTreeMap<(u32, u32), Vec<u32>> {
+    let mut out = BTreeMap::new();
+    for l in band_loops(soup, bands) {
+        let n = l.len();
+        let Some(first) = (0..n).find(|&k| nodes.contains(l[k])) else { continue };
+        let mut chain = vec![l[first]];
+        for i in 1..=n {
+            let v = l[(first + i) % n];
+            chain.push(v);
+            if nodes.contains(v) {
+                let key = (chain[0], v);
+                out.entry(key).or_insert_with(|| chain.clone());
+                chain = vec![v];
+            }
+        }
+    }
+    out
+}
+
+/// `points` resampled to `n` points evenly by arc length, ends kept.
+fn resample(points: &[DVec3], n: usize) -> Vec<DVec3> {
+    let poly = Polyline::new(points.to_vec(), false);
+    let len = poly.length();
+    if len <= 0.0 {
+        return vec![points[0]; n];
+    }
+    (0..n)
+        .map(|k| if k + 1 == n { points[points.len() - 1] } else { poly.point_at(len * k as f64 / (n - 1) as f64) })
+        .collect()
+}
+
+/// The grain: the pair of a piece's nodes running most nearly along the
+/// body's vertical, long and near its middle.
+fn grain(tris: &[usize], triangles: &[[u32; 3]], positions: &[DVec3], ax: &Axes) -> (u32, u32) {
+    let nodes: BTreeSet<u32> = tris.iter().flat_map(|&f| triangles[f]).collect();
+    let nodes: Vec<u32> = nodes.into_iter().collect();
+    let centre = nodes.iter().map(|&v| positions[v as usize]).sum::<DVec3>() / nodes.len().max(1) as f64;
+    let mut best = (f64::MIN, (nodes[0], nodes[nodes.len() - 1]));
+    for &a in &nodes {
+        for &b in &nodes {
+            let d = positions[a as usize] - positions[b as usize];
+            let rise = d.dot(ax.up);
+            if rise <= 0.0 {
+                continue;
+            }
+            let lateral = (d - ax.up * rise).length();
+            let mid = (positions[a as usize] + positions[b as usize]) * 0.5 - centre;
+            let off = (mid - ax.up * mid.dot(ax.up)).length();
+            let score = rise - 4.0 * lateral - off;
+            if score > best.0 {
+                best = (score, (a, b));
+            }
+        }
+    }
+    best.1
+}
+
+/// Pieces whose nodes mirror each other across the body's sagittal plane.
+fn mirror_pairs(
+    panels: &[DraftPanel],
+    triangles: &[[u32; 3]],
+    positions: &[DVec3],
+    ax: &Axes,
+    tolerance: f64,
+) -> Vec<[String; 2]> {
+    let node_sets: Vec<Vec<DVec3>> = panels
+        .iter()
+        .map(|p| {
+            let s: BTreeSet<u32> = p.triangles.iter().flat_map(|&f| triangles[f]).collect();
+            s.into_iter().map(|v| positions[v as usize]).collect()
+        })
+        .collect();
+    let mirror = |p: DVec3| p - 2.0 * ax.left * (p - ax.centre).dot(ax.left);
+    let mut out = Vec::new();
+    let mut paired = BTreeSet::new();
+    for i in 0..panels.len() {
+        for j in i + 1..panels.len() {
+            if paired.contains(&i) || paired.contains(&j) || node_sets[i].len() != node_sets[j].len() {
+                continue;
+            }
+            let mean = node_sets[i]
+                .iter()
+                .map(|&p| {
+                    let m = mirror(p);
+                    node_sets[j].iter().map(|q| q.distance(m)).fold(f64::MAX, f64::min)
+                })
+                .sum::<f64>()
+                / node_sets[i].len() as f64;
+            // a piece that mirrors onto itself is symmetric, not a pair
+            if mean <= tolerance {
+                out.push([panels[i].name.clone(), panels[j].name.clone()]);
+                paired.insert(i);
+                paired.insert(j);
+            }
+        }
+    }
+    out
+}
+
+/// The feature point a free node is tied to: the nearest, but never one of
+/// a girth line's points within [`RING_PLANE_TOLERANCE_M`] of its plane.
+fn free_tie(p: DVec3, body: &FeatureBody, rings: &[RingLine]) -> Option<PointId> {
+    body.points
+        .iter()
+        .filter(|(id, _)| {
+            let d = point_def(**id);
+            !rings.iter().any(|r| {
+                (d.f1 == r.curve || d.f2 == r.curve) && r.plane.signed_distance(p).abs() <= 1.5 * RING_PLANE_TOLERANCE_M
+            })
+        })
+        .min_by(|a, b| a.1.position.distance(p).total_cmp(&b.1.position.distance(p)))
+        .map(|(id, _)| *id)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn disc_counts() {
+        // two triangles: a disc; a tube (a square strip closed around): not
+        assert!(disc(&[[0, 1, 2], [0, 2, 3]]).0);
+        let tube: Vec<[u32; 3]> =
+            (0..4u32).flat_map(|k| [[k, (k + 1) % 4, 4 + k], [(k + 1) % 4, 4 + (k + 1) % 4, 4 + k]]).collect();
+        let (ok, loops, euler) = disc(&tube);
+        assert!(!ok);
+        assert_eq!((loops, euler), (2, 0));
+    }
+
+    #[test]
+    fn resample_keeps_ends_and_spacing() {
+        let pts = vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0)];
+        let r = resample(&pts, 5);
+        assert_eq!(r.len(), 5);
+        assert_eq!(r[0], DVec3::ZERO);
+        assert_eq!(r[4], DVec3::new(1.0, 1.0, 0.0));
+        assert!((r[2] - DVec3::X).length() < 1e-12);
+    }
+
+    #[test]
+    fn options_out_of_range_are_named() {
+        let e = check(&GarmentOptions { max_edge_mm: 0.0, ..Default::default() }).unwrap_err();
+        assert!(matches!(e, FromGarmentError::Option { name: "max_edge_mm", .. }));
+        let e = check(&GarmentOptions { profile_points: 1, ..Default::default() }).unwrap_err();
+        assert!(matches!(e, FromGarmentError::Option { name: "profile_points", .. }));
+    }
+}
