@@ -35,8 +35,8 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use super::format::{
-    Dart, Drop, Edge, Face, GradingDefaults, GrainLine, Hang, Node, Notch, OnCurve, Panel, Relocation, Seam, Template,
-    TemplateError, SCHEMA_ID, SCHEMA_VERSION,
+    Below, Between, Dart, Drop, Edge, Face, GradingDefaults, GrainLine, Hang, Node, Notch, OnCurve, Panel, Relocation,
+    Seam, Template, TemplateError, SCHEMA_ID, SCHEMA_VERSION,
 };
 use super::girth::{eased, eased_arc, girth_plane, place_ring_nodes, refit_rings, shorter_way};
 use super::profile::{Profile, ProfileError};
@@ -137,6 +137,10 @@ pub struct Draft {
     pub drops: Vec<Drop>,
     /// Nodes placed along a body curve.
     pub on_curve: Vec<OnCurve>,
+    /// Nodes lofted between two girths.
+    pub between: Vec<Between>,
+    /// Nodes hanging below a girth.
+    pub below: Vec<Below>,
     /// Nodes that hang straight between two others.
     pub hangs: Vec<Hang>,
     /// Mirror-pair panels (the template's `mirror_pairs`).
@@ -154,6 +158,8 @@ pub fn encode(draft: &Draft, body: &FeatureBody) -> Result<Template, CodecError>
     let mut hung = draft.clone();
     let mut moved: Vec<u32> =
         on_curve_nodes(&draft.on_curve, body, &mut hung.positions).into_iter().map(|(v, _)| v).collect();
+    moved.extend(between_nodes(&draft.between, body, &mut hung.positions));
+    moved.extend(below_nodes(&draft.below, body, &mut hung.positions));
     moved.extend(drop_nodes(&draft.drops, body, &mut hung.positions));
     moved.extend(hang(&draft.hangs, body, &mut hung.positions));
     if !moved.is_empty() {
@@ -278,6 +284,8 @@ pub fn encode(draft: &Draft, body: &FeatureBody) -> Result<Template, CodecError>
         darts,
         drops: draft.drops.clone(),
         on_curve: draft.on_curve.clone(),
+        between: draft.between.clone(),
+        below: draft.below.clone(),
         hangs: draft.hangs.clone(),
         mirror_pairs: draft.mirror_pairs.clone(),
         defaults: draft.defaults.clone(),
@@ -379,6 +387,139 @@ pub fn on_curve_nodes(placements: &[OnCurve], body: &FeatureBody, positions: &mu
         if let Some(slot) = positions.get_mut(c.node as usize) {
             *slot = p;
             placed.push((c.node, s));
+        }
+    }
+    placed
+}
+
+/// A girth walked for [`Between`]: its bridged loop, cumulative arc
+/// lengths, length and centroid.
+#[derive(Debug, Clone)]
+pub struct GirthWalk {
+    /// The bridged loop.
+    pub loop_: Polyline,
+    cum: Vec<f64>,
+    /// Its length, m.
+    pub length: f64,
+    /// Its centroid.
+    pub centroid: DVec3,
+}
+
+impl GirthWalk {
+    /// The body's girth `curve` bridged; `None` where it lacks it.
+    pub fn new(body: &FeatureBody, curve: CurveId) -> Option<Self> {
+        let plane = girth_plane(body, curve)?;
+        let loop_ = super::girth::bridged(&body.curves.get(&curve)?.polyline, &plane);
+        let length = loop_.length();
+        (length > f64::EPSILON).then(|| Self { cum: loop_.cumulative(), centroid: loop_.centroid(), length, loop_ })
+    }
+
+    /// The arc parameter of the loop point nearest `p`.
+    pub fn start(&self, p: DVec3) -> Option<f64> {
+        Some(self.loop_.closest(p)?.s)
+    }
+
+    /// The point at the fraction `f` of the length from parameter `s0`.
+    pub fn at(&self, s0: f64, f: f64) -> DVec3 {
+        self.loop_.point_at_with(&self.cum, (s0 + f * self.length).rem_euclid(self.length))
+    }
+}
+
+/// Where a [`Between`] placement lands (formula there): the lofted point at
+/// `fraction` and `height`, `radial` out; `None` when the girths' centroids
+/// coincide.
+pub fn between_point(
+    (lower, s_lower): (&GirthWalk, f64),
+    (upper, s_upper): (&GirthWalk, f64),
+    fraction: f64,
+    height: f64,
+    radial: f64,
+) -> Option<DVec3> {
+    let (a, b) = (lower.at(s_lower, fraction), upper.at(s_upper, fraction));
+    let q = a + (b - a) * height;
+    let c = lower.centroid + (upper.centroid - lower.centroid) * height;
+    let e = (upper.centroid - lower.centroid).normalize_or_zero();
+    if e == DVec3::ZERO {
+        return None;
+    }
+    let d = (q - c) - e * (q - c).dot(e);
+    Some(q + d.normalize_or_zero() * radial)
+}
+
+/// Places each node lofted between two girths ([`Between`]; formula
+/// there). Returns the nodes placed; one whose girths or points the body
+/// lacks keeps its position.
+pub fn between_nodes(placements: &[Between], body: &FeatureBody, positions: &mut [DVec3]) -> Vec<u32> {
+    let mut walks: BTreeMap<CurveId, Option<GirthWalk>> = BTreeMap::new();
+    for b in
+        [placements.iter().map(|b| b.lower).collect::<Vec<_>>(), placements.iter().map(|b| b.upper).collect()].concat()
+    {
+        walks.entry(b).or_insert_with(|| GirthWalk::new(body, b));
+    }
+    let mut placed = Vec::new();
+    for b in placements {
+        let point = |id: PointId| body.points.get(&id).map(|q| q.position);
+        let (Some(Some(lw)), Some(Some(uw))) = (walks.get(&b.lower), walks.get(&b.upper)) else { continue };
+        let (Some(ls), Some(us)) =
+            (point(b.lower_start).and_then(|p| lw.start(p)), point(b.upper_start).and_then(|p| uw.start(p)))
+        else {
+            continue;
+        };
+        let Some(p) = between_point((lw, ls), (uw, us), b.fraction, b.height, b.radial_m) else { continue };
+        if let Some(slot) = positions.get_mut(b.node as usize) {
+            *slot = p;
+            placed.push(b.node);
+        }
+    }
+    placed
+}
+
+/// The distance from `girth`'s plane down to the body's ankle girths (the
+/// mean of their centroids), along [`drop_axis`] ([`Below::leg_m`]);
+/// `None` where the body lacks them or they do not lie below.
+pub fn leg_length(body: &FeatureBody, girth: CurveId) -> Option<f64> {
+    let up = drop_axis(body, girth)?;
+    let plane = girth_plane(body, girth)?;
+    let ankles: Vec<DVec3> = [CurveId::AnkleLeft, CurveId::AnkleRight]
+        .iter()
+        .filter_map(|c| Some(body.curves.get(c)?.polyline.centroid()))
+        .collect();
+    if ankles.is_empty() {
+        return None;
+    }
+    let mean = ankles.iter().sum::<DVec3>() / ankles.len() as f64;
+    let d = (plane.project(mean) - mean).dot(up);
+    (d > 0.0).then_some(d)
+}
+
+/// Places each node hanging below a girth ([`Below`]; formula there).
+/// Returns the nodes placed; one whose girth or points the body lacks
+/// keeps its position.
+pub fn below_nodes(placements: &[Below], body: &FeatureBody, positions: &mut [DVec3]) -> Vec<u32> {
+    let mut placed = Vec::new();
+    let mut loops: BTreeMap<CurveId, Option<(Polyline, Plane, DVec3)>> = BTreeMap::new();
+    for b in placements {
+        let girth = loops
+            .entry(b.girth)
+            .or_insert_with(|| {
+                let plane = girth_plane(body, b.girth)?;
+                let loop_ = super::girth::bridged(&body.curves.get(&b.girth)?.polyline, &plane);
+                Some((loop_, plane, drop_axis(body, b.girth)?))
+            })
+            .as_ref();
+        let point = |id: PointId| body.points.get(&id).map(|q| q.position);
+        let (Some((loop_, plane, up)), Some(from), Some(to)) = (girth, point(b.from), point(b.to)) else {
+            continue;
+        };
+        let via = (from + to) * 0.5;
+        let Some((_, p)) = on_curve_point(loop_, plane, (from, to, via), b.fraction, b.radial_m) else { continue };
+        let drop = match leg_length(body, b.girth) {
+            Some(d) if b.leg_m > 0.0 => b.drop_m * d / b.leg_m,
+            _ => b.drop_m,
+        };
+        if let Some(slot) = positions.get_mut(b.node as usize) {
+            *slot = p - *up * drop;
+            placed.push(b.node);
         }
     }
     placed
@@ -517,6 +658,8 @@ pub fn decode(t: &Template, body: &FeatureBody, relocation: Relocation) -> Resul
     let mut on_curve = Vec::new();
     if eq1 {
         on_curve = on_curve_nodes(&t.on_curve, body, &mut positions);
+        between_nodes(&t.between, body, &mut positions);
+        below_nodes(&t.below, body, &mut positions);
         place_ring_nodes(t, body, &mut positions);
         drop_nodes(&t.drops, body, &mut positions);
     }

@@ -67,10 +67,11 @@ use std::collections::{BTreeMap, BTreeSet};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
-use super::codec::{encode, CodecError, Draft, DraftPanel, DraftSeam};
-use super::format::{GradingDefaults, Template};
+use super::codec::{between_point, drop_axis, leg_length, GirthWalk};
+use super::codec::{decode, encode, CodecError, Draft, DraftPanel, DraftSeam};
+use super::format::{Below, Between, GradingDefaults, Relocation, Template};
 use super::garment_panels::{weld_panels, PanelError, PanelMesh, WeldOptions};
-use super::girth::{girth_plane, ring_curves, RING_PLANE_TOLERANCE_M};
+use super::girth::{bridged, girth_plane, ring_curves, RING_PLANE_TOLERANCE_M};
 use crate::body::feature::FeatureBody;
 use crate::body::vocab::{point_def, CurveId, PointId, POINTS};
 use crate::geom::cut::split_by_plane;
@@ -145,7 +146,7 @@ impl Default for GarmentOptions {
             corner_angle_deg: 35.0,
             corner_span_mm: 15.0,
             ring_merge_mm: 30.0,
-            snap_mm: 0.5,
+            snap_mm: 2.0,
             profile_points: 7,
             mirror_tolerance_mm: 5.0,
             max_tie_mm: 250.0,
@@ -207,13 +208,15 @@ pub enum Unmapped {
         /// Its nearest node's distance to a feature point, mm.
         distance_mm: f64,
     },
-    /// A girth line crossed by a seam or hem away from every ring node:
-    /// the girth is not refitted on other bodies.
+    /// A girth line with nodes on it that are not its ring nodes (a seam
+    /// or hem crossing it away from every ring node, a vertex the
+    /// contraction could not otherwise remove): decoding does not refit
+    /// the girth on other bodies, its ease is Eq. (1)'s.
     BrokenRing {
         /// The girth.
         girth: String,
-        /// Crossings away from ring nodes.
-        crossings: usize,
+        /// Nodes on its line other than its ring nodes.
+        stray_nodes: usize,
     },
     /// A leg girth found on one leg only.
     OneSidedGirth {
@@ -508,7 +511,7 @@ pub fn author_from_garment(
     let mut notches: Vec<(String, u32)> = Vec::new();
     let outline = outline_kinds(&soup, &ring_edges);
     for r in &rings {
-        ring_nodes(r, body, &soup, &outline, opts, &mut nodes, &mut notches, &mut unmapped);
+        ring_nodes(r, body, &soup, &outline, opts, &mut nodes, &mut notches);
     }
     outline_nodes(&soup, &bands, &outline, opts, &mut nodes);
     for (index, p) in opts.nodes.iter().enumerate() {
@@ -526,20 +529,57 @@ pub fn author_from_garment(
     // (a band too narrow for its nodes contracts to a triangle another band
     // also has, or an edge of three bands: it gets its farthest vertex as a
     // node too, and is contracted again)
+    let outline_vertices: BTreeSet<u32> = band_loops(&soup, &bands).into_iter().flatten().collect();
+    let ring_vertices: BTreeSet<u32> = rings.iter().flat_map(|r| r.vertices.iter().copied()).collect();
+    let used: BTreeSet<u32> = soup.triangles.iter().flatten().copied().collect();
+    let mut stuck_rounds = 0;
+    let apex = STUCK_APEX * opts.max_edge_mm * 1e-3;
     let (coarse, coarse_panel) = loop {
         let c = contract(&soup, &bands, &nodes)?;
+        if !c.stuck.is_empty() {
+            stuck_rounds += 1;
+            let before = nodes.order.len();
+            for &v in &c.stuck {
+                // on a girth line a node would break the ring: an interior
+                // vertex about `apex` away instead gives the stuck one a
+                // locked apex to contract under
+                let v = if ring_vertices.contains(&v) && stuck_rounds < MAX_STUCK_ROUNDS {
+                    let p = soup.positions[v as usize];
+                    (0..soup.positions.len() as u32)
+                        .filter(|&w| !outline_vertices.contains(&w) && !nodes.contains(w) && used.contains(&w))
+                        .min_by(|&a, &b| {
+                            let off = |w: u32| (soup.positions[w as usize].distance(p) - apex).abs();
+                            off(a).total_cmp(&off(b))
+                        })
+                        .unwrap_or(v)
+                } else {
+                    v
+                };
+                nodes.add(v, None);
+            }
+            if nodes.order.len() > before {
+                continue;
+            }
+        }
         let crowded = crowded_bands(&c.triangles, &c.band);
         if crowded.is_empty() || nodes.order.len() >= soup.positions.len() {
             break (c.triangles, c.panel);
         }
         let before = nodes.order.len();
         for band in crowded {
-            farthest_vertex(&soup, &bands, band, &mut nodes);
+            farthest_vertex(&soup, &bands, band, &outline_vertices, &ring_vertices, &mut nodes);
         }
         if nodes.order.len() == before {
             break (c.triangles, c.panel);
         }
     };
+
+    for r in &rings {
+        let stray = r.vertices.iter().filter(|&&v| nodes.ties.get(&v).is_some_and(Option::is_none)).count();
+        if stray > 0 && !unmapped.iter().any(|u| matches!(u, Unmapped::BrokenRing { girth, .. } if girth == r.name)) {
+            unmapped.push(Unmapped::BrokenRing { girth: r.name.to_owned(), stray_nodes: stray });
+        }
+    }
 
     // node ids in the template: order of `nodes`
     let node_of: BTreeMap<u32, u32> = nodes.order.iter().enumerate().map(|(i, &v)| (v, i as u32)).collect();
@@ -638,16 +678,18 @@ pub fn author_from_garment(
             quantity: 1,
         })
         .collect();
-    let mirror_pairs = mirror_pairs(&panels, &triangles, &positions, &ax, opts.mirror_tolerance_mm * 1e-3);
+    let mirror_pairs = mirror_pairs(&soup, &kept_names, &ax, opts.mirror_tolerance_mm * 1e-3);
 
     // ties
     let ring_tie: BTreeMap<u32, PointId> =
         nodes.ties.iter().filter_map(|(&v, t)| t.map(|p| (node_of[&v], p))).collect();
+    let girth_planes: BTreeMap<CurveId, Plane> =
+        GIRTHS.iter().filter_map(|&c| Some((c, girth_plane(body, c)?))).collect();
     let mut ties = Vec::with_capacity(positions.len());
     for (i, &p) in positions.iter().enumerate() {
         ties.push(Some(match ring_tie.get(&(i as u32)) {
             Some(&t) => t,
-            None => free_tie(p, body, &rings).ok_or_else(|| FromGarmentError::Body("feature points".into()))?,
+            None => free_tie(p, body, &girth_planes).ok_or_else(|| FromGarmentError::Body("feature points".into()))?,
         }));
     }
     for (pi, panel) in panels.iter().enumerate() {
@@ -665,6 +707,10 @@ pub fn author_from_garment(
         }
     }
 
+    let ring_set: BTreeSet<u32> = ring_tie.keys().copied().collect();
+    let below = hanging(&positions, &ring_set, &surface, body, &rings);
+    let hung: BTreeSet<u32> = below.iter().map(|b| b.node).collect();
+    let between = lofted(&positions, &ring_set, &hung, body, &ax);
     let draft = Draft {
         name: name.to_owned(),
         version: 1,
@@ -684,10 +730,21 @@ pub fn author_from_garment(
         darts: Vec::new(),
         drops: Vec::new(),
         on_curve: Vec::new(),
+        between,
+        below,
         hangs: Vec::new(),
         mirror_pairs,
         defaults: opts.defaults.clone(),
     };
+    // ring nodes sit where decoding puts them (on the body's girth eased by
+    // the declared ease, at their feature point), so that decoding on the
+    // design body reproduces every stored node
+    let mut draft = draft;
+    let first = encode(&draft, body)?;
+    let placed = decode(&first, body, Relocation::Eq1Frame)?;
+    for &v in &ring_set {
+        draft.positions[v as usize] = placed.positions[v as usize];
+    }
     let template = encode(&draft, body)?;
     Ok(Authored { template, surface, unmapped, girths, pieces: kept_names })
 }
@@ -974,7 +1031,6 @@ impl NodeSet {
 }
 
 /// Ring nodes of one girth line (method, step 4, first item).
-#[expect(clippy::too_many_arguments, reason = "one step of author_from_garment, its state passed in")]
 fn ring_nodes(
     r: &RingLine,
     body: &FeatureBody,
@@ -983,7 +1039,6 @@ fn ring_nodes(
     opts: &GarmentOptions,
     nodes: &mut NodeSet,
     notches: &mut Vec<(String, u32)>,
-    unmapped: &mut Vec<Unmapped>,
 ) {
     let Some(curve) = body.curves.get(&r.curve) else { return };
     let centre = curve.polyline.centroid();
@@ -1038,16 +1093,11 @@ fn ring_nodes(
         };
         nodes.add(v, Some(p));
     }
-    let mut broken = 0;
     for &c in &crossings {
         notches.push((r.name.to_owned(), c));
         if !used_crossings.contains(&c) {
-            broken += 1;
             nodes.add(c, None);
         }
-    }
-    if broken > 0 {
-        unmapped.push(Unmapped::BrokenRing { girth: r.name.to_owned(), crossings: broken });
     }
 }
 
@@ -1085,6 +1135,9 @@ fn outline_nodes(
         }
         // corners: the chords to the points `span` away on either side
         for k in 0..n {
+            if kind(l[(k + n - 1) % n], l[k]) == Some(Along::Ring) && kind(l[k], l[(k + 1) % n]) == Some(Along::Ring) {
+                continue;
+            }
             let here = p(k);
             let mut i = 1;
             while i < n / 2 && p(k + n - i).distance(here) < span {
@@ -1133,7 +1186,13 @@ fn outline_nodes(
                 .collect()
         };
         let parts_min = if at.len() >= 3 { 1 } else { 3usize.div_ceil(at.len().max(1)) };
-        for (_, s0, s1) in segments {
+        for (k0, s0, s1) in segments {
+            // a girth line keeps its ring nodes only (decoding refits the
+            // arcs between them along the body's eased girth; a node between
+            // would break the ring)
+            if !at.is_empty() && kind(l[k0], l[(k0 + 1) % n]) == Some(Along::Ring) {
+                continue;
+            }
             let parts = (((s1 - s0) / max).ceil() as usize).max(parts_min);
             for m in 1..parts {
                 let s = s0 + (s1 - s0) * m as f64 / parts as f64;
@@ -1148,6 +1207,9 @@ fn outline_nodes(
 /// Interior nodes: farthest-point samples per band (method, step 4).
 fn interior_nodes(soup: &Soup, bands: &[usize], opts: &GarmentOptions, nodes: &mut NodeSet) {
     let spacing = opts.max_edge_mm * 1e-3 * opts.interior_spacing;
+    // outline vertices are placed by `outline_nodes` only (a node on a
+    // girth line between its ring nodes would break the ring)
+    let outline: BTreeSet<u32> = band_loops(soup, bands).into_iter().flatten().collect();
     let mut band_vertices: BTreeMap<usize, BTreeSet<u32>> = BTreeMap::new();
     for (f, t) in soup.triangles.iter().enumerate() {
         band_vertices.entry(bands[f]).or_default().extend(t.iter().copied());
@@ -1157,6 +1219,9 @@ fn interior_nodes(soup: &Soup, bands: &[usize], opts: &GarmentOptions, nodes: &m
         let mut dist: Vec<f64> = verts
             .iter()
             .map(|&v| {
+                if outline.contains(&v) {
+                    return 0.0;
+                }
                 let p = soup.positions[v as usize];
                 verts
                     .iter()
@@ -1214,14 +1279,25 @@ fn crowded_bands(coarse: &[[u32; 3]], band: &[usize]) -> BTreeSet<usize> {
     out
 }
 
-/// Adds the vertex of `band` farthest from every node as a node.
-fn farthest_vertex(soup: &Soup, bands: &[usize], band: usize, nodes: &mut NodeSet) {
+/// Adds the vertex of `band` farthest from every node as a node: an
+/// interior one where the band has any left, else one on its outline off
+/// the girth lines.
+fn farthest_vertex(
+    soup: &Soup,
+    bands: &[usize],
+    band: usize,
+    outline: &BTreeSet<u32>,
+    on_ring: &BTreeSet<u32>,
+    nodes: &mut NodeSet,
+) {
     let verts: BTreeSet<u32> =
         soup.triangles.iter().zip(bands).filter(|(_, &b)| b == band).flat_map(|(t, _)| *t).collect();
     let node_pos: Vec<DVec3> = nodes.order.iter().map(|&v| soup.positions[v as usize]).collect();
+    let interior = verts.iter().any(|&v| !nodes.contains(v) && !outline.contains(&v));
     let far = verts
         .iter()
-        .filter(|&&v| !nodes.contains(v))
+        .filter(|&&v| !nodes.contains(v) && !on_ring.contains(&v))
+        .filter(|&&v| !interior || !outline.contains(&v))
         .map(|&v| {
             let p = soup.positions[v as usize];
             (v, node_pos.iter().map(|q| q.distance(p)).fold(f64::MAX, f64::min))
@@ -1232,11 +1308,18 @@ fn farthest_vertex(soup: &Soup, bands: &[usize], band: usize, nodes: &mut NodeSe
     }
 }
 
+/// The contraction's options: seed 000's stop rule (the defaults).
+fn contraction_options() -> SimplifyOptions {
+    SimplifyOptions::default()
+}
+
 /// The coarse triangles (soup vertex ids), each one's piece and band.
 struct Contracted {
     triangles: Vec<[u32; 3]>,
     panel: Vec<usize>,
     band: Vec<usize>,
+    /// Free vertices the stop rule could not remove (then nothing else).
+    stuck: Vec<u32>,
 }
 
 /// Step 5: each band its own component (its own copies of the vertices),
@@ -1269,7 +1352,18 @@ fn contract(soup: &Soup, bands: &[usize], nodes: &NodeSet) -> Result<Contracted,
     let mesh = TriMesh::new(positions, tris).map_err(|e| FromGarmentError::Surface(e.to_string()))?;
     let locked: Vec<VertexId> =
         (0..origin.len() as u32).filter(|&c| nodes.contains(origin[c as usize])).map(VertexId).collect();
-    let s = simplify(&mesh, &locked, &SimplifyOptions::default())?;
+    let s = match simplify(&mesh, &locked, &contraction_options()) {
+        Ok(s) => s,
+        Err(SimplifyError::StopRuleUnreachable { .. }) => {
+            // the free vertices no contraction can remove become nodes
+            let loose = SimplifyOptions { stop_when_only_locked_edges: false, ..contraction_options() };
+            let s = simplify(&mesh, &locked, &loose)?;
+            let is_locked: BTreeSet<u32> = locked.iter().map(|v| v.0).collect();
+            let stuck = s.vertex_origin.iter().filter(|v| !is_locked.contains(&v.0)).map(|v| origin[v.idx()]).collect();
+            return Ok(Contracted { triangles: Vec::new(), panel: Vec::new(), band: Vec::new(), stuck });
+        }
+        Err(e) => return Err(e.into()),
+    };
     let mut out = Vec::with_capacity(s.mesh.face_count());
     let mut panel = Vec::with_capacity(s.mesh.face_count());
     let mut band = Vec::with_capacity(s.mesh.face_count());
@@ -1279,7 +1373,7 @@ fn contract(soup: &Soup, bands: &[usize], nodes: &NodeSet) -> Result<Contracted,
         band.push(copy_band[input[0] as usize]);
         panel.push(band_panel[&copy_band[input[0] as usize]]);
     }
-    Ok(Contracted { triangles: out, panel, band })
+    Ok(Contracted { triangles: out, panel, band, stuck: Vec::new() })
 }
 
 /// The dense outline chain between consecutive nodes on every band loop,
@@ -1341,40 +1435,37 @@ fn grain(tris: &[usize], triangles: &[[u32; 3]], positions: &[DVec3], ax: &Axes)
     best.1
 }
 
-/// Pieces whose nodes mirror each other across the body's sagittal plane.
-fn mirror_pairs(
-    panels: &[DraftPanel],
-    triangles: &[[u32; 3]],
-    positions: &[DVec3],
-    ax: &Axes,
-    tolerance: f64,
-) -> Vec<[String; 2]> {
-    let node_sets: Vec<Vec<DVec3>> = panels
+/// Pieces whose surfaces mirror each other across the body's sagittal
+/// plane: the mean distance from each mirrored vertex of one to the nearest
+/// vertex of the other within `tolerance` (a piece that mirrors onto
+/// itself is symmetric, not a pair).
+fn mirror_pairs(soup: &Soup, names: &[String], ax: &Axes, tolerance: f64) -> Vec<[String; 2]> {
+    let vertex_sets: Vec<Vec<DVec3>> = names
         .iter()
-        .map(|p| {
-            let s: BTreeSet<u32> = p.triangles.iter().flat_map(|&f| triangles[f]).collect();
-            s.into_iter().map(|v| positions[v as usize]).collect()
+        .map(|n| {
+            let p = soup.names.iter().position(|m| m == n).unwrap_or(usize::MAX);
+            let s: BTreeSet<u32> = piece_triangles(soup, p).into_iter().flatten().collect();
+            s.into_iter().map(|v| soup.positions[v as usize]).collect()
         })
         .collect();
     let mirror = |p: DVec3| p - 2.0 * ax.left * (p - ax.centre).dot(ax.left);
     let mut out = Vec::new();
     let mut paired = BTreeSet::new();
-    for i in 0..panels.len() {
-        for j in i + 1..panels.len() {
-            if paired.contains(&i) || paired.contains(&j) || node_sets[i].len() != node_sets[j].len() {
+    for i in 0..names.len() {
+        for j in i + 1..names.len() {
+            if paired.contains(&i) || paired.contains(&j) || vertex_sets[i].is_empty() || vertex_sets[j].is_empty() {
                 continue;
             }
-            let mean = node_sets[i]
+            let mean = vertex_sets[i]
                 .iter()
                 .map(|&p| {
                     let m = mirror(p);
-                    node_sets[j].iter().map(|q| q.distance(m)).fold(f64::MAX, f64::min)
+                    vertex_sets[j].iter().map(|q| q.distance(m)).fold(f64::MAX, f64::min)
                 })
                 .sum::<f64>()
-                / node_sets[i].len() as f64;
-            // a piece that mirrors onto itself is symmetric, not a pair
+                / vertex_sets[i].len() as f64;
             if mean <= tolerance {
-                out.push([panels[i].name.clone(), panels[j].name.clone()]);
+                out.push([names[i].clone(), names[j].clone()]);
                 paired.insert(i);
                 paired.insert(j);
             }
@@ -1383,19 +1474,299 @@ fn mirror_pairs(
     out
 }
 
-/// The feature point a free node is tied to: the nearest, but never one of
-/// a girth line's points within [`RING_PLANE_TOLERANCE_M`] of its plane.
-fn free_tie(p: DVec3, body: &FeatureBody, rings: &[RingLine]) -> Option<PointId> {
+/// The girths whose points a free node near their plane must not be tied
+/// to: those [`super::girth`] makes rings of, and those the pattern draws
+/// lines for (`pattern::assemble::GIRTH_CURVES`).
+const GIRTHS: [CurveId; 12] = [
+    CurveId::NeckBase,
+    CurveId::Chest,
+    CurveId::Bust,
+    CurveId::Underbust,
+    CurveId::Waist,
+    CurveId::Hip,
+    CurveId::ThighLeft,
+    CurveId::ThighRight,
+    CurveId::KneeLeft,
+    CurveId::KneeRight,
+    CurveId::AnkleLeft,
+    CurveId::AnkleRight,
+];
+
+/// The feature point a free node is tied to: the nearest, but never a
+/// girth's point when the node lies within 1.5 × [`RING_PLANE_TOLERANCE_M`]
+/// of that girth's plane (decoding would take it for a ring node, the
+/// pattern draw a girth line through it).
+fn free_tie(p: DVec3, body: &FeatureBody, planes: &BTreeMap<CurveId, Plane>) -> Option<PointId> {
+    let near_girth =
+        |c: CurveId| planes.get(&c).is_some_and(|pl| pl.signed_distance(p).abs() <= 1.5 * RING_PLANE_TOLERANCE_M);
     body.points
         .iter()
         .filter(|(id, _)| {
             let d = point_def(**id);
-            !rings.iter().any(|r| {
-                (d.f1 == r.curve || d.f2 == r.curve) && r.plane.signed_distance(p).abs() <= 1.5 * RING_PLANE_TOLERANCE_M
-            })
+            !near_girth(d.f1) && !near_girth(d.f2)
         })
         .min_by(|a, b| a.1.position.distance(p).total_cmp(&b.1.position.distance(p)))
         .map(|(id, _)| *id)
+}
+
+/// Nodes over the torso between two of the body's torso girths, lofted
+/// between them ([`Between`]; method, step 8): not ring nodes, not hanging,
+/// nearest to the torso (not to an arm beyond an armscye). The placement is
+/// solved for exactly (its `fraction` by bisection of the tangential
+/// offset, then `height` and `radial`); a node it cannot reproduce to
+/// 1 µm keeps Eq. (1).
+fn lofted(
+    positions: &[DVec3],
+    ring_node: &BTreeSet<u32>,
+    hung: &BTreeSet<u32>,
+    body: &FeatureBody,
+    ax: &Axes,
+) -> Vec<Between> {
+    // the torso girths with a walk and a start point (the one furthest front), bottom to top
+    let mut girths: Vec<(CurveId, GirthWalk, PointId, f64)> = TORSO
+        .iter()
+        .filter_map(|&c| {
+            let w = GirthWalk::new(body, c)?;
+            let start = POINTS
+                .iter()
+                .filter(|d| d.f1 == c || d.f2 == c)
+                .filter_map(|d| Some((d.id, body.points.get(&d.id)?.position)))
+                .max_by(|a, b| (a.1 - w.centroid).dot(ax.front).total_cmp(&(b.1 - w.centroid).dot(ax.front)))?;
+            let s0 = w.start(start.1)?;
+            Some((c, w, start.0, s0))
+        })
+        .collect();
+    girths.sort_by(|a, b| a.1.centroid.dot(ax.up).total_cmp(&b.1.centroid.dot(ax.up)));
+    // the arms: beyond an armscye's plane, away from the body's centre
+    // (and above the armscye's lowest point: the plane, tilted, runs into the hips below it)
+    let arms: Vec<(Plane, f64)> = [CurveId::ArmscyeLeft, CurveId::ArmscyeRight]
+        .iter()
+        .filter_map(|&c| {
+            let plane = girth_plane(body, c)?;
+            let curve = &body.curves.get(&c)?.polyline;
+            let out = curve.centroid() - ax.centre;
+            let low = curve.points.iter().map(|q| q.dot(ax.up)).fold(f64::MAX, f64::min);
+            Some((if plane.normal.dot(out) >= 0.0 { plane } else { plane.flipped() }, low))
+        })
+        .collect();
+    let index = SphereIndex::new(&body.mesh);
+    let mut out = Vec::new();
+    for (i, &p) in positions.iter().enumerate() {
+        let node = i as u32;
+        if ring_node.contains(&node) || hung.contains(&node) {
+            continue;
+        }
+        let height = p.dot(ax.up);
+        let Some(k) = girths
+            .windows(2)
+            .position(|w| w[0].1.centroid.dot(ax.up) <= height && height <= w[1].1.centroid.dot(ax.up))
+        else {
+            continue;
+        };
+        let q = index.closest_point(&body.mesh, p).point;
+        if arms.iter().any(|(a, low)| a.signed_distance(q) > 0.0 && q.dot(ax.up) >= *low) {
+            continue;
+        }
+        let (lower, upper) = (&girths[k], &girths[k + 1]);
+        if let Some(b) = solve_between(p, (lower.0, &lower.1, lower.2, lower.3), (upper.0, &upper.1, upper.2, upper.3))
+        {
+            out.push(Between { node, ..b });
+        }
+    }
+    out
+}
+
+/// Solves a [`Between`] placement reproducing `p` (node 0; the caller sets it).
+fn solve_between(
+    p: DVec3,
+    (lc, lw, lstart, ls): (CurveId, &GirthWalk, PointId, f64),
+    (uc, uw, ustart, us): (CurveId, &GirthWalk, PointId, f64),
+) -> Option<Between> {
+    let e = (uw.centroid - lw.centroid).normalize_or_zero();
+    if e == DVec3::ZERO {
+        return None;
+    }
+    // for a fraction f: the height, the lofted point, the outward and tangential offsets
+    let frame = |f: f64| -> Option<(f64, DVec3, DVec3, f64)> {
+        let (a, b) = (lw.at(ls, f), uw.at(us, f));
+        let den = (b - a).dot(e);
+        if den.abs() < 1e-9 {
+            return None;
+        }
+        let h = (p - a).dot(e) / den;
+        let base = a + (b - a) * h;
+        let c = lw.centroid + (uw.centroid - lw.centroid) * h;
+        let d = ((base - c) - e * (base - c).dot(e)).normalize_or_zero();
+        let t = (p - base).dot(e.cross(d));
+        Some((h, d, base, t))
+    };
+    const SAMPLES: usize = 720;
+    let mut best: Option<(f64, f64)> = None; // (error, f)
+    let mut prev = frame(0.0);
+    for k in 1..=SAMPLES {
+        let f1 = k as f64 / SAMPLES as f64;
+        let cur = frame(f1);
+        if let (Some(a), Some(b)) = (prev, cur) {
+            // a sign change of the tangential offset on the node's side of the axis
+            if a.3 * b.3 <= 0.0 && (p - a.2).dot(a.1) > -0.05 {
+                let (mut lo, mut hi, mut tlo) = ((k - 1) as f64 / SAMPLES as f64, f1, a.3);
+                for _ in 0..60 {
+                    let mid = 0.5 * (lo + hi);
+                    let Some(m) = frame(mid) else { break };
+                    if tlo * m.3 <= 0.0 {
+                        hi = mid;
+                    } else {
+                        (lo, tlo) = (mid, m.3);
+                    }
+                }
+                let f = 0.5 * (lo + hi);
+                if let Some((h, d, base, _)) = frame(f) {
+                    let r = (p - base).dot(d);
+                    let q = between_point((lw, ls), (uw, us), f, h, r)?;
+                    let err = q.distance(p);
+                    if best.is_none_or(|(e0, _)| err < e0) {
+                        best = Some((err, f));
+                    }
+                }
+            }
+        }
+        prev = cur;
+    }
+    let (err, f) = best?;
+    if err > 1e-6 {
+        return None;
+    }
+    let (h, d, base, _) = frame(f)?;
+    let r = (p - base).dot(d);
+    Some(Between {
+        node: 0,
+        lower: lc,
+        lower_start: lstart,
+        upper: uc,
+        upper_start: ustart,
+        fraction: f.clamp(0.0, 1.0),
+        height: h,
+        radial_m: r,
+    })
+}
+
+/// Rounds in which a free vertex stuck on a girth line gets the nearest
+/// interior vertex as a node (a locked apex to contract towards); after
+/// them it becomes a node itself (and its ring is reported broken).
+const MAX_STUCK_ROUNDS: usize = 16;
+
+/// The distance of that interior vertex from the stuck one, as a fraction
+/// of [`GarmentOptions::max_edge_mm`] (the nearest, a centimetre away, made
+/// slivers and got stuck again).
+const STUCK_APEX: f64 = 0.0;
+
+/// The torso girths a garment may hang from, top to bottom.
+const TORSO: [CurveId; 6] =
+    [CurveId::NeckBase, CurveId::Chest, CurveId::Bust, CurveId::Underbust, CurveId::Waist, CurveId::Hip];
+
+/// Nodes hanging below the garment's lowest torso girth line (method, step
+/// 8): below its plane, where the garment's section through the node
+/// (parallel to the girth) goes around more than one part of the body (both
+/// legs). Each is placed relative to the girth ([`Below`]).
+fn hanging(
+    positions: &[DVec3],
+    ring_node: &BTreeSet<u32>,
+    surface: &TriMesh,
+    body: &FeatureBody,
+    rings: &[RingLine],
+) -> Vec<Below> {
+    let Some(r) = TORSO.iter().rev().find_map(|c| rings.iter().find(|r| r.curve == *c)) else { return Vec::new() };
+    let (Some(curve), Some(up)) = (body.curves.get(&r.curve), drop_axis(body, r.curve)) else { return Vec::new() };
+    let plane = r.plane;
+    let loop_ = bridged(&curve.polyline, &plane);
+    let centre = loop_.centroid();
+    let cum = loop_.cumulative();
+    let total = loop_.length();
+    let (e1, e2) = plane.basis();
+    let to2 = |q: DVec3| glam::DVec2::new((q - centre).dot(e1), (q - centre).dot(e2));
+    // the girth's points by arc parameter
+    let mut points: Vec<(f64, PointId)> = POINTS
+        .iter()
+        .filter(|d| d.f1 == r.curve || d.f2 == r.curve)
+        .filter_map(|d| Some((loop_.closest(body.points.get(&d.id)?.position)?.s, d.id)))
+        .collect();
+    points.sort_by(|a, b| a.0.total_cmp(&b.0));
+    if points.len() < 3 || total <= 0.0 {
+        return Vec::new();
+    }
+    let mut body_levels: BTreeMap<i64, Vec<DVec3>> = BTreeMap::new();
+    let mut out = Vec::new();
+    for (i, &p) in positions.iter().enumerate() {
+        let node = i as u32;
+        let below = -(p - plane.project(p)).dot(up);
+        if ring_node.contains(&node) || below <= 0.5 * RING_PLANE_TOLERANCE_M {
+            continue;
+        }
+        // the garment's loop through the node (at a hem, just above it), and
+        // the body's parts at that level
+        let found = [0.0, 0.005, 0.015, 0.03].iter().find_map(|&dz| {
+            let level = Plane::from_point_normal(p + up * dz, plane.normal)?;
+            slice(surface, &level)
+                .into_iter()
+                .map(|s| s.polyline)
+                .filter(|l| l.closed)
+                .min_by(|a, b| {
+                    let d = |l: &Polyline| l.closest(p).map_or(f64::MAX, |c| c.point.distance(p));
+                    d(a).total_cmp(&d(b))
+                })
+                .map(|g| (g, level))
+        });
+        let Some((garment, level)) = found else { continue };
+        let key = (level.offset * 200.0).round() as i64;
+        let parts = body_levels.entry(key).or_insert_with(|| {
+            slice(&body.mesh, &level).into_iter().filter(|s| s.polyline.closed).map(|s| s.polyline.centroid()).collect()
+        });
+        if parts.iter().filter(|c| garment.contains_projected(&level, **c)).count() < 2 {
+            continue;
+        }
+        // the ray from the bridged loop's centroid through the node's projection
+        let proj = plane.project(p);
+        let dir = to2(proj).normalize_or_zero();
+        if dir == glam::DVec2::ZERO {
+            continue;
+        }
+        let mut hit = None;
+        for k in 0..loop_.segment_count() {
+            let (a, b) = loop_.segment(k);
+            let (a2, b2) = (to2(a), to2(b));
+            let seg = b2 - a2;
+            let den = dir.perp_dot(seg);
+            if den.abs() < 1e-15 {
+                continue;
+            }
+            let t = a2.perp_dot(seg) / den;
+            let u = a2.perp_dot(dir) / den;
+            if t > 0.0 && (0.0..=1.0).contains(&u) && hit.is_none_or(|(tt, _, _): (f64, usize, f64)| t > tt) {
+                hit = Some((t, k, u));
+            }
+        }
+        let Some((_, k, u)) = hit else { continue };
+        let (a, b) = loop_.segment(k);
+        let q = a + (b - a) * u;
+        let s = (cum[k] + a.distance(b) * u).rem_euclid(total);
+        let out_dir = {
+            let d = q - centre;
+            (d - plane.normal * d.dot(plane.normal)).normalize_or_zero()
+        };
+        let radial = (proj - q).dot(out_dir);
+        // the pair of girth points around s
+        let j = points.iter().rposition(|(sp, _)| *sp <= s).unwrap_or(points.len() - 1);
+        let (sa, from) = points[j];
+        let (sb, to) = points[(j + 1) % points.len()];
+        let span = (sb - sa).rem_euclid(total);
+        if span <= 0.0 {
+            continue;
+        }
+        let fraction = ((s - sa).rem_euclid(total) / span).clamp(0.0, 1.0);
+        let leg_m = leg_length(body, r.curve).unwrap_or(0.0);
+        out.push(Below { node, girth: r.curve, from, to, fraction, radial_m: radial, drop_m: below, leg_m });
+    }
+    out
 }
 
 #[cfg(test)]

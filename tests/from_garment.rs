@@ -1,0 +1,209 @@
+//! Issue #18, item 1: templates authored from a designed garment
+//! (`grade3d::template::from_garment`), on MakeHuman's helper-skirt and
+//! helper-tights (`fixtures/garments/`), whose design body is MakeHuman's
+//! base mesh ([`BodyModel::base_mesh`]).
+//!
+//! Bars:
+//! * round trip: the template graded back onto its design body lies within
+//!   2 mm mean and 6 mm at the 95th percentile of the designed surface, in
+//!   both directions (graded → designed, designed → graded);
+//! * the authored skirt graded on every fixture body and ASTM size passes
+//!   the bars of issues #7/#8 (`common/bars.rs`), but for the strain bar:
+//!   its designed surface does not flatten within 4 % p95 on its own design
+//!   body (front 4.5 %, back 7.3 %, its two darts per piece decided there),
+//!   so its pieces are held to [`SKIRT_STRAIN_CEILING`], a guard against
+//!   regressions, not the bar. The bodysuit (helper-tights) is held to the
+//!   round trip only: its sleeves have no arm girths to follow (issue #18,
+//!   item 5) and its feet are closed; graded on other bodies its sleeves
+//!   and quarters tear (measured, see the issue's notes).
+
+use std::sync::OnceLock;
+
+use grade3d::body::derive::{derive_features, DeriveOptions};
+use grade3d::body::feature::FeatureBody;
+use grade3d::collide::cache::Obstacle;
+use grade3d::collide::render::{RenderOptions, Renderer, RendererChoice};
+use grade3d::collide::DepthRenderer;
+use grade3d::geom::mesh::TriMesh;
+use grade3d::geom::query::SphereIndex;
+use grade3d::geom::winding::{WindingOptions, WindingTree};
+use grade3d::io::gltf::read_mesh;
+use grade3d::mannequin::landmarks::hm08_landmarks;
+use grade3d::mannequin::model::BodyModel;
+use grade3d::pattern::garment::DartSource;
+use grade3d::pipeline::{block, grade, grade_with_darts, GradeOptions};
+use grade3d::template::codec::decode;
+use grade3d::template::format::{Relocation, Template};
+use grade3d::template::from_garment::{author_from_garment, Authored, GarmentOptions, TubeCut};
+use grade3d::template::garment_panels::PanelMesh;
+
+mod common;
+use common::{fixture_bodies, fixtures};
+
+#[path = "common/bars.rs"]
+mod bars;
+
+/// The authored skirt's strain ceiling (p95 edge strain; module docs):
+/// measured 15.8 % at worst over the 20 fixture bodies.
+const SKIRT_STRAIN_CEILING: f64 = 0.17;
+
+/// How far decoding on the design body may put a node from where authoring
+/// stored it, m.
+const DECODE_TOLERANCE_M: f64 = 1e-3;
+
+/// Round-trip bars, mm.
+const ROUND_TRIP_MEAN_MM: f64 = 2.0;
+/// See [`ROUND_TRIP_MEAN_MM`].
+const ROUND_TRIP_P95_MM: f64 = 6.0;
+
+fn renderer() -> &'static Renderer {
+    static R: OnceLock<Renderer> = OnceLock::new();
+    R.get_or_init(|| Renderer::new(RendererChoice::Auto).expect("a depth-map renderer"))
+}
+
+fn obstacle(mesh: &TriMesh) -> Obstacle {
+    Obstacle {
+        maps: renderer().depth_maps(mesh, &RenderOptions::default()).unwrap(),
+        tree: WindingTree::new(mesh, &WindingOptions::default()),
+    }
+}
+
+/// MakeHuman's base mesh with its features: the helpers' design body.
+fn design_body() -> &'static FeatureBody {
+    static B: OnceLock<FeatureBody> = OnceLock::new();
+    B.get_or_init(|| {
+        let model = BodyModel::embedded().unwrap();
+        let base = model.base_mesh().unwrap();
+        let lm = hm08_landmarks(model, &base, &Default::default()).unwrap();
+        derive_features(base, &lm, &DeriveOptions::default()).unwrap()
+    })
+}
+
+/// A fixture garment as one piece (MakeHuman's helpers are single meshes).
+fn garment(name: &str) -> PanelMesh {
+    let m = read_mesh(&std::fs::read(fixtures().join(format!("garments/{name}.glb"))).unwrap(), &Default::default())
+        .unwrap()
+        .welded(1e-9)
+        .unwrap();
+    PanelMesh {
+        name: name.trim_start_matches("helper-").to_owned(),
+        positions: m.positions().to_vec(),
+        triangles: m.triangles().iter().map(|t| t.map(|v| v.0)).collect(),
+    }
+}
+
+/// The two authored templates: the skirt cut at its sides, the tights (a
+/// bodysuit) at the armscyes, sides and centre.
+fn authored() -> &'static [(String, Authored)] {
+    static A: OnceLock<Vec<(String, Authored)>> = OnceLock::new();
+    A.get_or_init(|| {
+        [("helper-skirt", TubeCut::Sides), ("helper-tights", TubeCut::SidesAndCentre)]
+            .into_iter()
+            .map(|(name, cut)| {
+                let opts = GarmentOptions { cut, ..Default::default() };
+                let a = author_from_garment(name, &[garment(name)], design_body(), &opts).unwrap();
+                (name.to_owned(), a)
+            })
+            .collect()
+    })
+}
+
+/// Mean and 95th percentile of `d`, mm.
+fn mean_p95(mut d: Vec<f64>) -> (f64, f64) {
+    d.sort_by(f64::total_cmp);
+    (d.iter().sum::<f64>() / d.len() as f64 * 1e3, d[d.len() * 95 / 100] * 1e3)
+}
+
+#[test]
+fn authored_templates_are_valid_documents_that_decode_exactly() {
+    for (name, a) in authored() {
+        let t = &a.template;
+        // the JSON document passes the schema and every check, and reads back equal
+        let back = Template::from_json(&t.to_json()).unwrap();
+        assert_eq!(&back, t, "{name}");
+        // decoding on the design body reproduces the stored nodes
+        let m = decode(t, design_body(), Relocation::Eq1Frame).unwrap();
+        let worst = m
+            .positions
+            .iter()
+            .zip(&t.nodes)
+            .map(|(p, n)| p.distance(glam::DVec3::from_array(n.reference)))
+            .fold(0.0, f64::max);
+        eprintln!(
+            "{name}: {} nodes, {} faces, pieces {:?}, ease {:?}, {} seams, {} notches, mirror pairs {:?}, unmapped {:?}; decode on the design body off by {:.2e} m",
+            t.nodes.len(),
+            t.faces.len(),
+            a.pieces,
+            a.girths,
+            t.seams.len(),
+            t.notches.len(),
+            t.mirror_pairs,
+            a.unmapped,
+            worst
+        );
+        // (a ring node of a ring a stray node breaks is placed by Eq. (1) on the second
+        // pass of authoring, the ring's offset solved without it: 0.12 mm on the bodysuit)
+        assert!(worst < DECODE_TOLERANCE_M, "{name}: decode off by {worst}");
+        assert!(!t.seams.is_empty() && !t.notches.is_empty(), "{name}");
+    }
+    let [(_, skirt), (_, tights)] = authored() else { panic!("two garments") };
+    // planted answers: the skirt is a tube cut into front and back, its hip found
+    assert_eq!(skirt.pieces, ["skirt-front", "skirt-back"]);
+    assert!(skirt.girths.contains_key("hip"));
+    // the bodysuit: two sleeves (upper, under) and four quarters, mirror pairs left/right
+    assert_eq!(tights.pieces.len(), 8, "{:?}", tights.pieces);
+    for g in ["waist", "hip", "thigh", "knee"] {
+        assert!(tights.girths.contains_key(g), "tights lack {g}: {:?}", tights.girths);
+    }
+    assert!(tights.template.mirror_pairs.contains(&["tights-front-left".into(), "tights-front-right".into()]));
+    assert!(tights.template.mirror_pairs.contains(&["tights-back-left".into(), "tights-back-right".into()]));
+}
+
+#[test]
+fn round_trip_onto_the_design_body() {
+    let obstacle = obstacle(&design_body().mesh);
+    let mut failures = Vec::new();
+    for (name, a) in authored() {
+        let g = grade(&a.template, design_body(), Some(&obstacle), "design", &GradeOptions::default()).unwrap();
+        let graded = g.cut_mesh().unwrap();
+        let (gi, si) = (SphereIndex::new(&graded), SphereIndex::new(&a.surface));
+        let to_design =
+            mean_p95(graded.positions().iter().map(|&q| si.closest_point(&a.surface, q).distance).collect());
+        let to_graded =
+            mean_p95(a.surface.positions().iter().map(|&q| gi.closest_point(&graded, q).distance).collect());
+        eprintln!(
+            "{name}: graded → designed mean {:.2} mm, p95 {:.2} mm; designed → graded mean {:.2} mm, p95 {:.2} mm",
+            to_design.0, to_design.1, to_graded.0, to_graded.1
+        );
+        for (what, (mean, p95)) in [("graded → designed", to_design), ("designed → graded", to_graded)] {
+            if mean > ROUND_TRIP_MEAN_MM || p95 > ROUND_TRIP_P95_MM {
+                failures.push(format!("{name} {what}: mean {mean:.2} mm, p95 {p95:.2} mm"));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+#[test]
+fn the_authored_skirt_passes_the_grade_bars_on_every_fixture() {
+    let design = obstacle(&design_body().mesh);
+    let mut b = bars::Bars::default();
+    b.open_templates.push(("helper-skirt".into(), SKIRT_STRAIN_CEILING));
+    let mut failures = Vec::new();
+    for (name, a) in authored().iter().filter(|(n, _)| n == "helper-skirt") {
+        let t = &a.template;
+        let plan = block(t, design_body(), Some(&design), &GradeOptions::default()).unwrap();
+        for (body_name, mesh, lm) in fixture_bodies() {
+            let body = derive_features(mesh, &lm, &DeriveOptions::default()).unwrap();
+            let o = obstacle(&body.mesh);
+            match grade_with_darts(t, &body, Some(&o), &body_name, &GradeOptions::default(), DartSource::Block(&plan)) {
+                Ok(g) => b.check(t, &body, &o, &g, &body_name, false),
+                Err(e) => failures.push(format!("{name} on {body_name}: {e}")),
+            }
+        }
+    }
+    eprintln!("{} grades", b.grades);
+    b.report();
+    failures.extend(b.failures);
+    assert!(failures.is_empty(), "{} failures:\n{}", failures.len(), failures.join("\n"));
+}
