@@ -56,6 +56,29 @@ enum Command {
         #[arg(long)]
         plain: bool,
     },
+    /// Author a template from a designed garment (issue #18): GLB with one mesh per pattern
+    /// piece or OBJ with one group per piece, draped on its design body. Writes the template
+    /// JSON (ready for `POST /v1/templates`) and prints what was made and what could not be
+    /// mapped, as `POST /v1/templates/from-garment` answers. Exit code 2: bad input; 1: failed.
+    Author {
+        /// The garment file.
+        garment: PathBuf,
+        /// The template's name.
+        #[arg(long)]
+        name: String,
+        /// Its design body: `reference` or `makehuman-base`.
+        #[arg(long, default_value = "reference")]
+        body: String,
+        /// The garment's units: `m`, `cm` or `mm` (default: found from its size).
+        #[arg(long)]
+        units: Option<String>,
+        /// Authoring options, a JSON file (the request's `options` part).
+        #[arg(long)]
+        options: Option<PathBuf>,
+        /// Where to write the template JSON.
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// Print the service's OpenAPI document (YAML), generated from its router and types:
     /// what `openapi.yaml` holds (`grade3d openapi > openapi.yaml`).
     Openapi,
@@ -166,7 +189,48 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
         Command::Panels { dir } => write_panels(&dir)?,
         Command::Openapi => print!("{}", grade3d::service::api::openapi_yaml()?),
         Command::Measure { body, landmarks } => measure_body(&body, &landmarks)?,
+        Command::Author { garment, name, body, units, options, out } => {
+            author_template(&garment, name, &body, units.as_deref(), options.as_deref(), &out)?
+        }
     }
+    Ok(())
+}
+
+/// `grade3d author`: the service's authoring ([`grade3d::service::author`])
+/// on files.
+fn author_template(
+    garment: &std::path::Path,
+    name: String,
+    body: &str,
+    units: Option<&str>,
+    options: Option<&std::path::Path>,
+    out: &std::path::Path,
+) -> Result<(), Box<dyn std::error::Error>> {
+    use grade3d::service::author::{author, AuthorParts, AuthorRequestError};
+    let bad = |what: String| -> Box<dyn std::error::Error> { Box::new(BadInput(what)) };
+    let bytes = std::fs::read(garment).map_err(|e| bad(format!("{}: {e}", garment.display())))?;
+    // an enum's value by its JSON name
+    let word = |text: &str| serde_json::Value::String(text.to_owned());
+    let body = serde_json::from_value(word(body))
+        .map_err(|_| bad(format!("--body `{body}`: allowed reference, makehuman-base")))?;
+    let units = match units {
+        Some(u) => Some(serde_json::from_value(word(u)).map_err(|_| bad(format!("--units `{u}`: allowed m, cm, mm")))?),
+        None => None,
+    };
+    let options = match options {
+        Some(path) => {
+            let text = std::fs::read_to_string(path).map_err(|e| bad(format!("{}: {e}", path.display())))?;
+            serde_json::from_str(&text).map_err(|e| bad(format!("{}: {e}", path.display())))?
+        }
+        None => Default::default(),
+    };
+    let parts = AuthorParts { garment: bytes.into(), name, body, units, options };
+    let (template, report) = author(&parts).map_err(|e| match e {
+        AuthorRequestError::Body(_) => Box::new(e) as Box<dyn std::error::Error>,
+        e => bad(format!("{}: {e}", garment.display())),
+    })?;
+    std::fs::write(out, template.to_json()).map_err(|e| format!("{}: {e}", out.display()))?;
+    println!("{}", serde_json::to_string_pretty(&report)?);
     Ok(())
 }
 

@@ -349,6 +349,77 @@ fn template_library_over_http() {
     call("GET", &s.url("/v1/templates/mini-skirt"), &[], None).problem(404, None);
 }
 
+/// Issue #18, item 1: a template authored from a designed garment over HTTP
+/// (MakeHuman's helper-skirt on its design body), stored, read back and
+/// graded; each refusal names its part.
+#[test]
+fn a_template_is_authored_from_a_garment() {
+    let s = Server::start(&temp_dir("author"), &[("GRADE3D_MAX_BODY_BYTES", "4000000")]);
+    let skirt = fixture("garments/helper-skirt.glb");
+    let post = |parts: &[(&str, Option<&str>, &[u8])], key: bool| {
+        let (ct, body) = multipart(parts);
+        let a = auth();
+        let mut headers = vec![("Content-Type", ct.as_str())];
+        if key {
+            headers.push((a.0, a.1.as_str()));
+        }
+        call("POST", &s.url("/v1/templates/from-garment"), &headers, Some(&body))
+    };
+    let good: Vec<(&str, Option<&str>, &[u8])> = vec![
+        ("garment", Some("skirt.glb"), &skirt),
+        ("name", None, b"authored-skirt"),
+        ("body", None, b"makehuman-base"),
+    ];
+    assert_eq!(post(&good, false).status, 401, "a write needs the key");
+    let r = post(&good, true);
+    assert_eq!(r.status, 201, "{}", r.text());
+    assert_eq!(r.header("location"), Some("/v1/templates/authored-skirt"));
+    let j = r.json();
+    assert_eq!(j["template"], serde_json::json!({"name": "authored-skirt", "version": 1}));
+    assert_eq!(j["pieces"].as_array().unwrap().len(), 2, "{j}");
+    assert!(j["ease_mm"]["hip"].as_f64().is_some_and(|e| e > 0.0), "{j}");
+    assert_eq!(j["units"], "m");
+    // stored: read back as a valid template, and graded like any other
+    let r = call("GET", &s.url("/v1/templates/authored-skirt"), &[], None);
+    assert_eq!(r.status, 200);
+    grade3d::template::format::Template::from_json(&r.text()).unwrap();
+    let job = format!(r#"{{"templates":["authored-skirt"],"chart":{CHART},"base_size":"S"}}"#);
+    let r = call("POST", &s.url("/v1/grade/size-chart"), &[json_ct()], Some(job.as_bytes()));
+    assert_eq!(r.status, 200, "{}", r.text());
+    // the same name again: 409
+    assert_eq!(post(&good, true).status, 409);
+    // refusals, each naming its part
+    let refused = |parts: &[(&str, Option<&str>, &[u8])], status: u16, field: &str| {
+        let r = post(parts, true);
+        assert_eq!(r.status, status, "{}", r.text());
+        assert_eq!(r.json()["field"], field, "{}", r.text());
+    };
+    refused(&[("name", None, b"x")], 400, "garment");
+    refused(&[("garment", Some("s.glb"), &skirt)], 400, "name");
+    refused(&[("garment", Some("s.glb"), &skirt), ("name", None, b"x"), ("units", None, b"inch")], 400, "units");
+    refused(&[("garment", Some("s.glb"), &skirt), ("name", None, b"x"), ("body", None, b"giant")], 400, "body");
+    refused(&[("garment", Some("s.glb"), &skirt), ("name", None, b"x"), ("colour", None, b"red")], 400, "colour");
+    refused(
+        &[("garment", Some("s.glb"), &skirt), ("name", None, b"x"), ("options", None, b"{\"max_edge_mm\": -1}")],
+        400,
+        "options",
+    );
+    refused(
+        &[("garment", Some("s.glb"), &skirt), ("name", None, b"x"), ("options", None, b"{\"colour\": 1}")],
+        400,
+        "options",
+    );
+    refused(&[("garment", Some("s.glb"), b"glTF\x02\0\0\0"), ("name", None, b"x")], 400, "garment");
+    // a tube that may not be cut cannot be laid flat
+    refused(
+        &[("garment", Some("s.glb"), &skirt), ("name", None, b"x"), ("options", None, b"{\"cut\": \"none\"}")],
+        422,
+        "garment",
+    );
+    // millimetres stated for a garment in metres: too small to be a garment once read
+    refused(&[("garment", Some("s.glb"), &skirt), ("name", None, b"x"), ("units", None, b"mm")], 422, "garment");
+}
+
 #[test]
 fn writes_are_refused_without_a_configured_key_and_reads_can_be_protected() {
     let s = Server::start(&temp_dir("protect"), &[("GRADE3D_PROTECT_READS", "true")]);

@@ -436,6 +436,36 @@ pub fn read_mesh(bytes: &[u8], opts: &GltfReadOptions) -> Result<TriMesh, GltfEr
 /// primitive's vertex count), for a scan that is repaired before it is
 /// validated (`grade3d_core::geom::repair`, issue #17).
 pub fn read_soup(bytes: &[u8], opts: &GltfReadOptions) -> Result<(Vec<DVec3>, Vec<[u64; 3]>), GltfError> {
+    let mut positions: Vec<DVec3> = Vec::new();
+    let mut triangles: Vec<[u64; 3]> = Vec::new();
+    for part in read_parts(bytes, opts)? {
+        let base = positions.len() as u64;
+        positions.extend(part.positions);
+        triangles.extend(part.triangles.into_iter().map(|t| t.map(|i| i + base)));
+    }
+    Ok((positions, triangles))
+}
+
+/// One mesh primitive instance of the scene, in world space.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SoupPart {
+    /// The mesh's name (`mesh-{index}` where it has none), with `.{k}` for
+    /// its `k`-th triangle primitive when it has several, and `#{n}` for the
+    /// `n`-th instance of a mesh placed more than once.
+    pub name: String,
+    /// Its vertices, metres as stored (after the node transforms).
+    pub positions: Vec<DVec3>,
+    /// Its triangles, indices into `positions`.
+    pub triangles: Vec<[u64; 3]>,
+}
+
+/// Every triangle primitive instance of the default scene as its own part
+/// (issue #18: a garment exported one mesh per pattern piece); the same
+/// contract and limits as [`read_mesh`] otherwise.
+///
+/// # Errors
+/// [`GltfError`].
+pub fn read_parts(bytes: &[u8], opts: &GltfReadOptions) -> Result<Vec<SoupPart>, GltfError> {
     if bytes.len() > opts.max_bytes {
         return Err(GltfError::InputTooLarge { len: bytes.len(), max: opts.max_bytes });
     }
@@ -444,13 +474,15 @@ pub fn read_soup(bytes: &[u8], opts: &GltfReadOptions) -> Result<(Vec<DVec3>, Ve
     let mut buffers = Buffers { root: &root, bin, cache: vec![None; root.buffers.len()] };
     let instances = mesh_instances(&root)?;
 
-    let mut positions: Vec<DVec3> = Vec::new();
-    let mut triangles: Vec<[u64; 3]> = Vec::new();
+    let mut parts: Vec<SoupPart> = Vec::new();
+    // Vertices read so far, against `max_vertices` (the parts' sum).
+    let mut vertices_read = 0usize;
     // Triangles charged against `max_triangles`, counted before strips drop degenerate ones, so
     // every primitive instance read costs at least one and the total work stays bounded.
     let mut charged = 0usize;
     // Per mesh, its triangle-based primitives and their modes, worked out on first use.
     let mut plans: Vec<Option<Vec<(usize, Mode)>>> = vec![None; root.meshes.len()];
+    let mut seen: HashMap<usize, usize> = HashMap::new();
     for (mesh_index, world) in instances {
         let mesh = root.meshes.get(mesh_index).ok_or(GltfError::DanglingIndex { kind: "mesh", index: mesh_index })?;
         let plan = match plans.get_mut(mesh_index) {
@@ -458,10 +490,17 @@ pub fn read_soup(bytes: &[u8], opts: &GltfReadOptions) -> Result<(Vec<DVec3>, Ve
             Some(slot) => slot.insert(triangle_primitives(mesh, mesh_index)?),
             None => return Err(GltfError::DanglingIndex { kind: "mesh", index: mesh_index }),
         };
+        let instance = {
+            let n = seen.entry(mesh_index).or_insert(0);
+            *n += 1;
+            *n
+        };
+        let mesh_name = mesh.name.clone().unwrap_or_else(|| format!("mesh-{mesh_index}"));
+        let several = plan.len() > 1;
         let flip = world.determinant() < 0.0;
-        // POSITION accessor -> (first vertex in `positions`, vertex count), per node instance.
-        let mut shared: HashMap<usize, (u64, usize)> = HashMap::new();
-        for &(primitive, mode) in plan.iter() {
+        // POSITION accessor -> (part, first vertex in it, vertex count), per node instance.
+        let mut shared: HashMap<usize, (usize, u64, usize)> = HashMap::new();
+        for (k, &(primitive, mode)) in plan.iter().enumerate() {
             let prim = mesh
                 .primitives
                 .get(primitive)
@@ -472,13 +511,26 @@ pub fn read_soup(bytes: &[u8], opts: &GltfReadOptions) -> Result<(Vec<DVec3>, Ve
                 .get(&Checked::Valid(Semantic::Positions))
                 .ok_or(GltfError::MissingPosition { mesh: mesh_index, primitive })?
                 .value();
-            let (base, vertex_count) = match shared.get(&pos_accessor) {
+            let mut name = mesh_name.clone();
+            if several {
+                name = format!("{name}.{k}");
+            }
+            if instance > 1 {
+                name = format!("{name}#{instance}");
+            }
+            let (part, base, vertex_count) = match shared.get(&pos_accessor) {
                 Some(&entry) => entry,
                 None => {
-                    let base = positions.len() as u64;
+                    let mut positions = Vec::new();
                     let count = append_positions(&mut buffers, site, pos_accessor, &world, opts, &mut positions)?;
-                    shared.insert(pos_accessor, (base, count));
-                    (base, count)
+                    vertices_read += count;
+                    if vertices_read > opts.max_vertices {
+                        return Err(GltfError::TooManyVertices { mesh: mesh_index, primitive, max: opts.max_vertices });
+                    }
+                    parts.push(SoupPart { name: name.clone(), positions, triangles: Vec::new() });
+                    let entry = (parts.len() - 1, 0, count);
+                    shared.insert(pos_accessor, entry);
+                    entry
                 }
             };
             let corners = match prim.indices {
@@ -497,16 +549,18 @@ pub fn read_soup(bytes: &[u8], opts: &GltfReadOptions) -> Result<(Vec<DVec3>, Ve
                     vertices: vertex_count,
                 });
             }
+            let triangles = &mut parts[part].triangles;
             assemble(mode, &corners, site, |t| {
                 let t = t.map(|i| i + base);
                 triangles.push(if flip { [t[0], t[2], t[1]] } else { t });
             })?;
         }
     }
-    if triangles.is_empty() {
+    parts.retain(|p| !p.triangles.is_empty());
+    if parts.is_empty() {
         return Err(GltfError::NoTriangles);
     }
-    Ok((positions, triangles))
+    Ok(parts)
 }
 
 /// The triangle-based primitives of a mesh with their modes; point and line primitives are left out.

@@ -6,6 +6,7 @@
 
 use grade3d_core::{body, geom};
 
+pub mod garment;
 pub mod gltf;
 pub mod landmarks;
 pub mod obj;

@@ -5,6 +5,7 @@
 
 use axum::http::StatusCode;
 
+use super::author::AuthorRequestError;
 use super::problem::Problem;
 use super::store::StoreError;
 use super::work::WorkError;
@@ -12,6 +13,7 @@ use crate::body::derive::FeatureError;
 use crate::body::frame::FrameError;
 use crate::geom::repair::RepairError;
 use crate::geom::topology::TopologyError;
+use crate::io::garment::GarmentFileError;
 use crate::io::gltf::GltfError;
 use crate::io::landmarks::LandmarkFileError;
 use crate::mannequin::fit::FitError;
@@ -27,6 +29,7 @@ use crate::refine::clear::ClearError;
 use crate::refine::subdivide::RefineError;
 use crate::template::codec::CodecError;
 use crate::template::format::TemplateError;
+use crate::template::from_garment::FromGarmentError;
 use crate::template::profile::ProfileError;
 use grade3d_core::scan::ScanError;
 
@@ -45,6 +48,36 @@ impl From<StoreError> for Problem {
                 Problem::new(StatusCode::CONFLICT, "template-exists", "Template exists", e.to_string()).field("name")
             }
             StoreError::NameMismatch { .. } => Problem::bad_request("name-mismatch", e.to_string()).field("name"),
+        }
+    }
+}
+
+impl From<AuthorRequestError> for Problem {
+    fn from(e: AuthorRequestError) -> Self {
+        let detail = e.to_string();
+        match &e {
+            AuthorRequestError::File(f) => match f {
+                GarmentFileError::Gltf(g) => gltf_problem(g, "garment", detail),
+                GarmentFileError::Obj(_) => Problem::bad_request("garment-obj", detail).field("garment"),
+                GarmentFileError::NotUtf8 => Problem::bad_request("garment-format", detail).field("garment"),
+                GarmentFileError::TooLarge { .. } => {
+                    Problem::new(StatusCode::PAYLOAD_TOO_LARGE, "garment-too-large", "Garment too large", detail)
+                        .field("garment")
+                }
+            },
+            AuthorRequestError::Units => Problem::unprocessable("garment-units", detail).field("units"),
+            AuthorRequestError::Body(_) => internal(&detail),
+            AuthorRequestError::Authoring(a) => match a {
+                FromGarmentError::Panels(_) => Problem::unprocessable("garment-pieces", detail).field("garment"),
+                FromGarmentError::NotADisc { .. } => {
+                    Problem::unprocessable("garment-not-a-disc", detail).field("garment")
+                }
+                FromGarmentError::Option { .. } => Problem::bad_request("invalid-options", detail).field("options"),
+                FromGarmentError::Body(_) => Problem::unprocessable("design-body", detail).field("body"),
+                FromGarmentError::Surface(_) => Problem::unprocessable("garment-surface", detail).field("garment"),
+                FromGarmentError::Simplify(_) => Problem::unprocessable("garment-contraction", detail).field("garment"),
+                FromGarmentError::Codec(_) => Problem::unprocessable("authoring-failed", detail).field("garment"),
+            },
         }
     }
 }

@@ -21,6 +21,7 @@ use grade3d_core::{body, geom, mannequin, pattern, pipeline, refine, template};
 use grade3d_io as io;
 
 pub mod api;
+pub mod author;
 pub mod blocks;
 pub mod collide;
 
@@ -333,6 +334,7 @@ pub fn routes() -> OpenApiRouter<AppState> {
         .routes(routes!(get_vocabulary))
         .routes(routes!(list_templates, create_template))
         .routes(routes!(get_template, replace_template, delete_template))
+        .routes(routes!(create_template_from_garment))
         .routes(routes!(grade_size_chart))
         .routes(routes!(grade_scan))
         .routes(routes!(get_result))
@@ -677,6 +679,48 @@ async fn create_template(
     let entry = s.0.pool.run(limit, move || me.0.store.put(None, &text, true)).await??;
     let location = format!("/v1/templates/{}", entry.name);
     Ok((StatusCode::CREATED, [(header::LOCATION, location)], Json(entry)).into_response())
+}
+
+/// Author a template from a designed garment (issue #18) and store it as version 1.
+#[utoipa::path(post, path = "/v1/templates/from-garment", tag = "templates", operation_id = "createTemplateFromGarment",
+    security(("apiKey" = [])),
+    request_body(content = author::GarmentUpload, content_type = "multipart/form-data",
+        description = "A garment draped on its design body: pieces welded, seams found, tubes cut, girth lines and nodes picked, the surface contracted to them (seed 000 §3.3), profiles attached, nodes encoded by Eq. (1) or placed relative to the body's girths."),
+    responses(
+        (status = 201, description = "Authored and stored, durably; what could not be mapped is listed.", body = author::Authored,
+            headers(("Location" = String, description = "/v1/templates/{name}"))),
+        (status = 409, response = api::Conflict),
+        api::FlowProblems,
+    ))]
+async fn create_template_from_garment(
+    State(s): State<AppState>,
+    headers: HeaderMap,
+    req: Request,
+) -> Result<Response, Problem> {
+    if !media_is(&headers, "multipart/form-data") {
+        return Err(unsupported_media(
+            "multipart/form-data with parts garment and name, optionally body, units, options",
+        ));
+    }
+    let (parts, body) = req.into_parts();
+    // the body is read before the key is checked: a refusal mid-upload would break the client's pipe
+    let bytes = body_bytes(&s, &headers, body).await?;
+    check_key(&s, &headers, true)?;
+    let req = Request::from_parts(parts, axum::body::Body::from(bytes));
+    let input = author::read_author_parts(req, s.0.cfg.max_body_bytes).await?;
+    valid_name(&input.name)?;
+    let me = s.clone();
+    let limit = s.0.cfg.request_timeout();
+    let report =
+        s.0.pool
+            .run(limit, move || -> Result<author::Authored, Problem> {
+                let (t, report) = author::author(&input)?;
+                let entry = me.0.store.put(None, &t.to_json(), true)?;
+                Ok(author::Authored { template: entry, ..report })
+            })
+            .await??;
+    let location = format!("/v1/templates/{}", report.template.name);
+    Ok((StatusCode::CREATED, [(header::LOCATION, location)], Json(report)).into_response())
 }
 
 /// Replace a template (a new version; earlier versions stay readable).
@@ -1479,7 +1523,7 @@ mod tests {
                 assert!(!text.contains("no such route"), "{method} {path} is documented but not routed: {text}");
             }
         }
-        assert_eq!(operations, 16, "the service's 16 operations");
+        assert_eq!(operations, 17, "the service's 17 operations");
         // the reverse: no route bypasses the documented list
         let code = include_str!("lib.rs");
         let code = &code[..code.find("#[cfg(test)]").unwrap_or(code.len())];

@@ -49,9 +49,25 @@
 //!    nodes mirror each other across the body's sagittal plane within
 //!    [`GarmentOptions::mirror_tolerance_mm`] (mean) is a mirror pair.
 //! 8. **Encoding** by seed 000 Eq. (1) ([`super::codec::encode`]): each node
-//!    tied to its nearest feature point, except that a node within
-//!    [`RING_PLANE_TOLERANCE_M`] of a girth line is never tied to that
-//!    girth's points (it would be taken for a ring node).
+//!    tied to its nearest feature point, except that a node within 1.5 ×
+//!    [`RING_PLANE_TOLERANCE_M`] of a girth's plane is never tied to that
+//!    girth's points (decoding would take it for a ring node, the pattern
+//!    draw a girth line through it). Eq. (1) carries a node by a fixed
+//!    offset in one point's frame; far from that point it swings with the
+//!    frame. So two kinds of node are placed relative to the body's girths
+//!    instead, covariantly and exactly on the design body:
+//!    * below the garment's lowest torso girth line, where the garment's
+//!      section through the node goes around more than one part of the
+//!      body (both legs: a skirt, a dress), the node *hangs* from that
+//!      girth ([`Below`]: arc fraction between two of its points, radial
+//!      offset, drop graded with the body's leg length);
+//!    * over the torso between two of the body's torso girths (not nearer
+//!      an arm), the node is *lofted* between them ([`Between`]: arc
+//!      fraction, height, radial offset).
+//!
+//!    Ring nodes are then set where decoding places them and the template
+//!    encoded again, so that decoding on the design body reproduces every
+//!    node.
 //!
 //! # Failure modes
 //!
@@ -197,7 +213,7 @@ pub enum FromGarmentError {
 }
 
 /// Something authoring could not map (the response lists them).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Unmapped {
     /// No node of the piece lies near a feature point: it follows the
@@ -246,6 +262,62 @@ pub struct Authored {
     pub girths: BTreeMap<String, f64>,
     /// Pieces after cutting.
     pub pieces: Vec<String>,
+}
+
+/// The body a garment was designed on, where it is one of ours.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, utoipa::ToSchema)]
+#[serde(rename_all = "kebab-case")]
+pub enum DesignBody {
+    /// The reference mannequin the built-in templates are authored on
+    /// ([`super::library::reference_body`]; default).
+    #[default]
+    Reference,
+    /// MakeHuman's base mesh, no target applied: the body MakeHuman's
+    /// helper geometry and the community's clothes for it are modelled on
+    /// ([`crate::mannequin::model::BodyModel::base_mesh`]).
+    MakehumanBase,
+}
+
+/// The feature model of a [`DesignBody`].
+///
+/// # Errors
+/// [`super::library::AuthorError`] (the embedded model, its landmarks or features).
+pub fn design_body(which: DesignBody) -> Result<FeatureBody, super::library::AuthorError> {
+    use crate::body::derive::{derive_features, DeriveOptions};
+    use crate::mannequin::landmarks::hm08_landmarks;
+    use crate::mannequin::model::BodyModel;
+    match which {
+        DesignBody::Reference => super::library::reference_body(),
+        DesignBody::MakehumanBase => {
+            let model = BodyModel::embedded()?;
+            let mesh = model.base_mesh()?;
+            let lm = hm08_landmarks(model, &mesh, &Default::default())?;
+            Ok(derive_features(mesh, &lm, &DeriveOptions::default())?)
+        }
+    }
+}
+
+/// The garment sizes (bounding-box diagonal) units are detected by, m: a
+/// garment's pieces span between these.
+pub const GARMENT_DIAGONAL_M: (f64, f64) = (0.15, 4.0);
+
+/// The unit a garment's coordinates are in: the first of metres,
+/// centimetres and millimetres in which the pieces' bounding-box diagonal
+/// lies within [`GARMENT_DIAGONAL_M`]; `None` if none does (or no vertex).
+pub fn detect_units(pieces: &[PanelMesh]) -> Option<crate::body::frame::Units> {
+    let mut lo = DVec3::splat(f64::MAX);
+    let mut hi = DVec3::splat(f64::MIN);
+    for p in pieces.iter().flat_map(|p| &p.positions) {
+        lo = lo.min(*p);
+        hi = hi.max(*p);
+    }
+    let diagonal = (hi - lo).length();
+    if !diagonal.is_finite() {
+        return None;
+    }
+    crate::body::frame::Units::ALL
+        .into_iter()
+        .find(|u| (GARMENT_DIAGONAL_M.0..=GARMENT_DIAGONAL_M.1).contains(&(diagonal * u.metres())))
 }
 
 /// The garment as a labelled triangle soup while it is cut.
@@ -1792,6 +1864,21 @@ mod tests {
         assert_eq!(r[0], DVec3::ZERO);
         assert_eq!(r[4], DVec3::new(1.0, 1.0, 0.0));
         assert!((r[2] - DVec3::X).length() < 1e-12);
+    }
+
+    #[test]
+    fn units_by_the_garments_size() {
+        use crate::body::frame::Units;
+        let piece = |s: f64| PanelMesh {
+            name: "p".into(),
+            positions: vec![DVec3::ZERO, DVec3::new(0.5, 0.0, 0.0) * s, DVec3::new(0.0, 0.9, 0.0) * s],
+            triangles: vec![[0, 1, 2]],
+        };
+        assert_eq!(detect_units(&[piece(1.0)]), Some(Units::Metres));
+        assert_eq!(detect_units(&[piece(100.0)]), Some(Units::Centimetres));
+        assert_eq!(detect_units(&[piece(1000.0)]), Some(Units::Millimetres));
+        assert_eq!(detect_units(&[piece(1e6)]), None);
+        assert_eq!(detect_units(&[]), None);
     }
 
     #[test]
