@@ -444,6 +444,25 @@ const fn section(landmarks: &'static [P], plane: PlaneRule, choice: LoopChoice, 
     CurveRule::Section { landmarks, plane, choice, orientation }
 }
 
+/// The girths: the closed horizontal (or neck) sections around the torso
+/// and each leg, top to bottom (the pattern draws their lines inside a
+/// piece, `pattern::assemble`; authoring keeps free nodes off their points
+/// near their planes, `template::from_garment`).
+pub const GIRTH_CURVES: [CurveId; 12] = [
+    CurveId::NeckBase,
+    CurveId::Chest,
+    CurveId::Bust,
+    CurveId::Underbust,
+    CurveId::Waist,
+    CurveId::Hip,
+    CurveId::ThighLeft,
+    CurveId::ThighRight,
+    CurveId::KneeLeft,
+    CurveId::KneeRight,
+    CurveId::AnkleLeft,
+    CurveId::AnkleRight,
+];
+
 /// Every curve of vocabulary version [`VOCABULARY_VERSION`].
 pub const CURVES: &[CurveDef] = &[
     CurveDef {

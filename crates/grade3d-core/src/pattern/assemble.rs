@@ -269,20 +269,7 @@ pub fn assemble(
 }
 
 /// The girths whose lines are drawn inside a piece (module docs).
-pub const GIRTH_CURVES: [CurveId; 12] = [
-    CurveId::NeckBase,
-    CurveId::Chest,
-    CurveId::Bust,
-    CurveId::Underbust,
-    CurveId::Waist,
-    CurveId::Hip,
-    CurveId::ThighLeft,
-    CurveId::ThighRight,
-    CurveId::KneeLeft,
-    CurveId::KneeRight,
-    CurveId::AnkleLeft,
-    CurveId::AnkleRight,
-];
+pub use crate::body::vocab::GIRTH_CURVES;
 
 /// Interior girth lines of the panel (module docs), merged into polylines.
 fn internal_lines(

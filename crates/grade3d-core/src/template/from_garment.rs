@@ -89,7 +89,7 @@ use super::format::{Below, Between, GradingDefaults, Relocation, Template};
 use super::garment_panels::{weld_panels, PanelError, PanelMesh, WeldOptions};
 use super::girth::{bridged, girth_plane, ring_curves, RING_PLANE_TOLERANCE_M};
 use crate::body::feature::FeatureBody;
-use crate::body::vocab::{point_def, CurveId, PointId, POINTS};
+use crate::body::vocab::{point_def, CurveId, PointId, GIRTH_CURVES, POINTS};
 use crate::geom::cut::split_by_plane;
 use crate::geom::mesh::{boundary_loops, TriMesh, VertexId};
 use crate::geom::plane::Plane;
@@ -756,7 +756,7 @@ pub fn author_from_garment(
     let ring_tie: BTreeMap<u32, PointId> =
         nodes.ties.iter().filter_map(|(&v, t)| t.map(|p| (node_of[&v], p))).collect();
     let girth_planes: BTreeMap<CurveId, Plane> =
-        GIRTHS.iter().filter_map(|&c| Some((c, girth_plane(body, c)?))).collect();
+        GIRTH_CURVES.iter().filter_map(|&c| Some((c, girth_plane(body, c)?))).collect();
     let mut ties = Vec::with_capacity(positions.len());
     for (i, &p) in positions.iter().enumerate() {
         ties.push(Some(match ring_tie.get(&(i as u32)) {
@@ -1545,24 +1545,6 @@ fn mirror_pairs(soup: &Soup, names: &[String], ax: &Axes, tolerance: f64) -> Vec
     }
     out
 }
-
-/// The girths whose points a free node near their plane must not be tied
-/// to: those [`super::girth`] makes rings of, and those the pattern draws
-/// lines for (`pattern::assemble::GIRTH_CURVES`).
-const GIRTHS: [CurveId; 12] = [
-    CurveId::NeckBase,
-    CurveId::Chest,
-    CurveId::Bust,
-    CurveId::Underbust,
-    CurveId::Waist,
-    CurveId::Hip,
-    CurveId::ThighLeft,
-    CurveId::ThighRight,
-    CurveId::KneeLeft,
-    CurveId::KneeRight,
-    CurveId::AnkleLeft,
-    CurveId::AnkleRight,
-];
 
 /// The feature point a free node is tied to: the nearest, but never a
 /// girth's point when the node lies within 1.5 × [`RING_PLANE_TOLERANCE_M`]
