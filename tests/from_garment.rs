@@ -44,7 +44,8 @@ use common::{fixture_bodies, fixtures};
 mod bars;
 
 /// The authored skirt's strain ceiling (p95 edge strain; module docs):
-/// measured 15.8 % at worst over the 20 fixture bodies.
+/// measured 12.9 % at worst over the 20 fixture bodies (16.4 % over the
+/// issue #7 population, run once, not in CI).
 const SKIRT_STRAIN_CEILING: f64 = 0.17;
 
 /// How far decoding on the design body may put a node from where authoring
@@ -206,4 +207,40 @@ fn the_authored_skirt_passes_the_grade_bars_on_every_fixture() {
     b.report();
     failures.extend(b.failures);
     assert!(failures.is_empty(), "{} failures:\n{}", failures.len(), failures.join("\n"));
+}
+
+/// Regression (the literal failing input): the authored skirt on issue #7's
+/// population body 39 (`sample_population(40, 13)`, pop39-m-average-short).
+/// A node lofted 4.6 cm above the hip on the design body was tied to
+/// `hip_left`; on this short body it came within 3 cm of the hip's plane,
+/// decoding took it for a second ring node at that point, and the edge to
+/// the first had no length ("attached points 0 and 1 coincide"). Free nodes
+/// are no longer tied to a ring girth's points.
+#[test]
+fn regression_the_authored_skirt_decodes_on_pop39() {
+    use grade3d::mannequin::population::sample_population;
+    let model = BodyModel::embedded().unwrap();
+    let p = &sample_population(40, 13)[39];
+    assert_eq!(p.name, "pop39-m-average-short");
+    let mesh = model.build(&p.params).unwrap();
+    let lm = hm08_landmarks(model, &mesh, &Default::default()).unwrap();
+    let body = derive_features(mesh, &lm, &DeriveOptions::default()).unwrap();
+    let (_, skirt) = &authored()[0];
+    let t = &skirt.template;
+    decode(t, &body, Relocation::Eq1Frame).unwrap();
+    // no free node is tied to a point of the hip, the girth the skirt has a ring on
+    let ring: std::collections::BTreeSet<u32> = grade3d::template::girth::ring_nodes(
+        t,
+        design_body(),
+        &decode(t, design_body(), Relocation::Eq1Frame).unwrap().positions,
+        grade3d::body::vocab::CurveId::Hip,
+        &[],
+    )
+    .into_iter()
+    .collect();
+    for (i, n) in t.nodes.iter().enumerate() {
+        if n.point.to_string().starts_with("hip_") {
+            assert!(ring.contains(&(i as u32)), "node {i} is tied to {} but is no ring node", n.point);
+        }
+    }
 }

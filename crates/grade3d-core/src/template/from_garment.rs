@@ -757,11 +757,13 @@ pub fn author_from_garment(
         nodes.ties.iter().filter_map(|(&v, t)| t.map(|p| (node_of[&v], p))).collect();
     let girth_planes: BTreeMap<CurveId, Plane> =
         GIRTH_CURVES.iter().filter_map(|&c| Some((c, girth_plane(body, c)?))).collect();
+    let ring_curves_used: BTreeSet<CurveId> = rings.iter().map(|r| r.curve).collect();
     let mut ties = Vec::with_capacity(positions.len());
     for (i, &p) in positions.iter().enumerate() {
         ties.push(Some(match ring_tie.get(&(i as u32)) {
             Some(&t) => t,
-            None => free_tie(p, body, &girth_planes).ok_or_else(|| FromGarmentError::Body("feature points".into()))?,
+            None => free_tie(p, body, &girth_planes, &ring_curves_used)
+                .ok_or_else(|| FromGarmentError::Body("feature points".into()))?,
         }));
     }
     for (pi, panel) in panels.iter().enumerate() {
@@ -1546,13 +1548,24 @@ fn mirror_pairs(soup: &Soup, names: &[String], ax: &Axes, tolerance: f64) -> Vec
     out
 }
 
-/// The feature point a free node is tied to: the nearest, but never a
-/// girth's point when the node lies within 1.5 × [`RING_PLANE_TOLERANCE_M`]
-/// of that girth's plane (decoding would take it for a ring node, the
-/// pattern draw a girth line through it).
-fn free_tie(p: DVec3, body: &FeatureBody, planes: &BTreeMap<CurveId, Plane>) -> Option<PointId> {
-    let near_girth =
-        |c: CurveId| planes.get(&c).is_some_and(|pl| pl.signed_distance(p).abs() <= 1.5 * RING_PLANE_TOLERANCE_M);
+/// The feature point a free node is tied to: the nearest, but never a point
+/// of a girth the template has a ring on (`rings`: on another body the node
+/// may come within [`RING_PLANE_TOLERANCE_M`] of the girth's plane, and
+/// decoding would take it for a second ring node at that point — a node
+/// lofted 4.6 cm above the hip on the design body came within 3 cm on a
+/// short man, pop39, and the two landed on one point), nor a point of
+/// another girth when the node lies within 1.5 × that tolerance of its plane
+/// (the pattern would draw a girth line through it).
+fn free_tie(
+    p: DVec3,
+    body: &FeatureBody,
+    planes: &BTreeMap<CurveId, Plane>,
+    rings: &BTreeSet<CurveId>,
+) -> Option<PointId> {
+    let near_girth = |c: CurveId| {
+        rings.contains(&c)
+            || planes.get(&c).is_some_and(|pl| pl.signed_distance(p).abs() <= 1.5 * RING_PLANE_TOLERANCE_M)
+    };
     body.points
         .iter()
         .filter(|(id, _)| {
