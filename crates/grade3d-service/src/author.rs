@@ -8,7 +8,6 @@ use std::collections::BTreeMap;
 
 use axum::body::Bytes;
 use axum::extract::{FromRequest, Multipart, Request};
-use axum::http::StatusCode;
 use serde::{Deserialize, Serialize};
 
 use super::problem::Problem;
@@ -118,28 +117,9 @@ pub async fn read_author_parts(req: Request, max: usize) -> Result<AuthorParts, 
         .await
         .map_err(|e| Problem::bad_request("invalid-multipart", e.body_text()).field("body"))?;
     let (mut garment, mut name, mut body, mut units, mut options) = (None, None, DesignBody::default(), None, None);
-    loop {
-        let field = match mp.next_field().await {
-            Ok(Some(f)) => f,
-            Ok(None) => break,
-            Err(e) => {
-                return Err(if e.status() == StatusCode::PAYLOAD_TOO_LARGE {
-                    super::too_large(max)
-                } else {
-                    Problem::bad_request("invalid-multipart", e.body_text()).field("body")
-                })
-            }
-        };
-        let part = field.name().unwrap_or("").to_owned();
-        let data = field.bytes().await.map_err(|e| {
-            if e.status() == StatusCode::PAYLOAD_TOO_LARGE {
-                super::too_large(max)
-            } else {
-                Problem::bad_request("invalid-multipart", e.body_text()).field(part.clone())
-            }
-        })?;
+    while let Some((part, data)) = super::next_part(&mut mp, max).await? {
         match part.as_str() {
-            "garment" => garment = Some(data.clone()),
+            "garment" => garment = Some(data),
             "name" => name = Some(text(&part, &data)?),
             "body" => body = value(&part, &data, "reference, makehuman-base")?,
             "units" => units = Some(value(&part, &data, "m, cm, mm")?),

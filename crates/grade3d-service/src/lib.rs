@@ -1016,6 +1016,26 @@ fn hint_part<T: serde::de::DeserializeOwned>(name: &str, data: &[u8], allowed: &
     })
 }
 
+/// The next part of a multipart body (its name and bytes) whose body is
+/// already within the limit `max`; `None` after the last.
+///
+/// # Errors
+/// [`Problem`]: 413 naming `max` should the reader raise one, else a 400
+/// `invalid-multipart` naming the body or the part.
+pub(crate) async fn next_part(mp: &mut Multipart, max: usize) -> Result<Option<(String, Bytes)>, Problem> {
+    let refusal = |e: axum::extract::multipart::MultipartError, field: &str| {
+        if e.status() == StatusCode::PAYLOAD_TOO_LARGE {
+            too_large(max)
+        } else {
+            Problem::bad_request("invalid-multipart", e.body_text()).field(field)
+        }
+    };
+    let Some(field) = mp.next_field().await.map_err(|e| refusal(e, "body"))? else { return Ok(None) };
+    let name = field.name().unwrap_or("").to_owned();
+    let data = field.bytes().await.map_err(|e| refusal(e, &name))?;
+    Ok(Some((name, data)))
+}
+
 /// Reads a scan upload (`multipart/form-data` with the parts `scan` and
 /// `template`, and optionally `landmarks`, `units`, `up` and `facing`) whose body is already within the limit
 /// `max` (named in a 413 should the multipart reader raise one): every
@@ -1030,27 +1050,7 @@ pub async fn read_scan_parts(req: Request, max: usize) -> Result<ScanParts, Prob
         .map_err(|e| Problem::bad_request("invalid-multipart", e.body_text()).field("body"))?;
     let (mut scan, mut landmarks, mut templates) = (None, None, Vec::new());
     let mut hints = FrameHints::default();
-    loop {
-        let field = match mp.next_field().await {
-            Ok(Some(f)) => f,
-            Ok(None) => break,
-            Err(e) => {
-                let p = if e.status() == StatusCode::PAYLOAD_TOO_LARGE {
-                    too_large(max)
-                } else {
-                    Problem::bad_request("invalid-multipart", e.body_text()).field("body")
-                };
-                return Err(p);
-            }
-        };
-        let name = field.name().unwrap_or("").to_owned();
-        let data = field.bytes().await.map_err(|e| {
-            if e.status() == StatusCode::PAYLOAD_TOO_LARGE {
-                too_large(max)
-            } else {
-                Problem::bad_request("invalid-multipart", e.body_text()).field(name.clone())
-            }
-        })?;
+    while let Some((name, data)) = next_part(&mut mp, max).await? {
         match name.as_str() {
             "scan" => scan = Some(data),
             "landmarks" => landmarks = Some(data),

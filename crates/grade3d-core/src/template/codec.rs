@@ -497,23 +497,25 @@ pub fn leg_length(body: &FeatureBody, girth: CurveId) -> Option<f64> {
 /// keeps its position.
 pub fn below_nodes(placements: &[Below], body: &FeatureBody, positions: &mut [DVec3]) -> Vec<u32> {
     let mut placed = Vec::new();
-    let mut loops: BTreeMap<CurveId, Option<(Polyline, Plane, DVec3)>> = BTreeMap::new();
+    /// A girth's bridged loop, plane, up axis and leg length, taken once.
+    type Hung = (Polyline, Plane, DVec3, Option<f64>);
+    let mut girths: BTreeMap<CurveId, Option<Hung>> = BTreeMap::new();
     for b in placements {
-        let girth = loops
+        let girth = girths
             .entry(b.girth)
             .or_insert_with(|| {
                 let plane = girth_plane(body, b.girth)?;
                 let loop_ = super::girth::bridged(&body.curves.get(&b.girth)?.polyline, &plane);
-                Some((loop_, plane, drop_axis(body, b.girth)?))
+                Some((loop_, plane, drop_axis(body, b.girth)?, leg_length(body, b.girth)))
             })
             .as_ref();
         let point = |id: PointId| body.points.get(&id).map(|q| q.position);
-        let (Some((loop_, plane, up)), Some(from), Some(to)) = (girth, point(b.from), point(b.to)) else {
+        let (Some((loop_, plane, up, leg)), Some(from), Some(to)) = (girth, point(b.from), point(b.to)) else {
             continue;
         };
         let via = (from + to) * 0.5;
         let Some((_, p)) = on_curve_point(loop_, plane, (from, to, via), b.fraction, b.radial_m) else { continue };
-        let drop = match leg_length(body, b.girth) {
+        let drop = match leg {
             Some(d) if b.leg_m > 0.0 => b.drop_m * d / b.leg_m,
             _ => b.drop_m,
         };

@@ -577,6 +577,8 @@ pub fn author_from_garment(
         })
         .collect();
     let bands = bands(&soup, &ring_edges);
+    // every band's outline loops, once (nodes, interior sampling, contraction and profiles read them)
+    let loops = band_loops(&soup, &bands);
 
     // nodes
     let mut nodes = NodeSet::default();
@@ -585,7 +587,7 @@ pub fn author_from_garment(
     for r in &rings {
         ring_nodes(r, body, &soup, &outline, opts, &mut nodes, &mut notches);
     }
-    outline_nodes(&soup, &bands, &outline, opts, &mut nodes);
+    outline_nodes(&soup, &loops, &outline, opts, &mut nodes);
     for (index, p) in opts.nodes.iter().enumerate() {
         let p = DVec3::from_array(*p);
         let (v, d) = nearest_vertex(&soup.positions, p);
@@ -595,13 +597,13 @@ pub fn author_from_garment(
             nodes.add(v, None);
         }
     }
-    interior_nodes(&soup, &bands, opts, &mut nodes);
+    interior_nodes(&soup, &bands, &loops, opts, &mut nodes);
 
     // topology: each band its own component, the nodes locked
     // (a band too narrow for its nodes contracts to a triangle another band
     // also has, or an edge of three bands: it gets its farthest vertex as a
     // node too, and is contracted again)
-    let outline_vertices: BTreeSet<u32> = band_loops(&soup, &bands).into_iter().flatten().collect();
+    let outline_vertices: BTreeSet<u32> = loops.iter().flatten().copied().collect();
     let ring_vertices: BTreeSet<u32> = rings.iter().flat_map(|r| r.vertices.iter().copied()).collect();
     let used: BTreeSet<u32> = soup.triangles.iter().flatten().copied().collect();
     let mut stuck_rounds = 0;
@@ -661,7 +663,7 @@ pub fn author_from_garment(
     // profiles
     let surface = soup_mesh(&soup)?;
     let index = SphereIndex::new(&surface);
-    let chains = outline_chains(&soup, &bands, &nodes);
+    let chains = outline_chains(&loops, &nodes);
     let mut profiles = Vec::new();
     let mut done = BTreeSet::new();
     for t in &triangles {
@@ -1187,16 +1189,15 @@ fn band_loops(soup: &Soup, bands: &[usize]) -> Vec<Vec<u32>> {
 /// Outline nodes (method, step 4, second and third item).
 fn outline_nodes(
     soup: &Soup,
-    bands: &[usize],
+    loops: &[Vec<u32>],
     outline: &BTreeMap<(u32, u32), Along>,
     opts: &GarmentOptions,
     nodes: &mut NodeSet,
 ) {
-    let loops = band_loops(soup, bands);
     let kind = |a: u32, b: u32| outline.get(&(a.min(b), a.max(b))).copied();
     let span = opts.corner_span_mm * 1e-3;
     let cos_max = opts.corner_angle_deg.to_radians().cos();
-    for l in &loops {
+    for l in loops {
         let n = l.len();
         let p = |k: usize| soup.positions[l[k % n] as usize];
         // changes of kind
@@ -1237,7 +1238,7 @@ fn outline_nodes(
     // spacing along the outline (after every loop's corners, so that a
     // shared chain is split the same way on both sides)
     let max = opts.max_edge_mm * 1e-3;
-    for l in &loops {
+    for l in loops {
         let n = l.len();
         let at: Vec<usize> = (0..n).filter(|&k| nodes.contains(l[k])).collect();
         let cum: Vec<f64> = {
@@ -1279,11 +1280,11 @@ fn outline_nodes(
 }
 
 /// Interior nodes: farthest-point samples per band (method, step 4).
-fn interior_nodes(soup: &Soup, bands: &[usize], opts: &GarmentOptions, nodes: &mut NodeSet) {
+fn interior_nodes(soup: &Soup, bands: &[usize], loops: &[Vec<u32>], opts: &GarmentOptions, nodes: &mut NodeSet) {
     let spacing = opts.max_edge_mm * 1e-3 * opts.interior_spacing;
     // outline vertices are placed by `outline_nodes` only (a node on a
     // girth line between its ring nodes would break the ring)
-    let outline: BTreeSet<u32> = band_loops(soup, bands).into_iter().flatten().collect();
+    let outline: BTreeSet<u32> = loops.iter().flatten().copied().collect();
     let mut band_vertices: BTreeMap<usize, BTreeSet<u32>> = BTreeMap::new();
     for (f, t) in soup.triangles.iter().enumerate() {
         band_vertices.entry(bands[f]).or_default().extend(t.iter().copied());
@@ -1452,9 +1453,9 @@ fn contract(soup: &Soup, bands: &[usize], nodes: &NodeSet) -> Result<Contracted,
 
 /// The dense outline chain between consecutive nodes on every band loop,
 /// keyed by its (first, last) soup vertex, in loop order.
-fn outline_chains(soup: &Soup, bands: &[usize], nodes: &NodeSet) -> BTreeMap<(u32, u32), Vec<u32>> {
+fn outline_chains(loops: &[Vec<u32>], nodes: &NodeSet) -> BTreeMap<(u32, u32), Vec<u32>> {
     let mut out = BTreeMap::new();
-    for l in band_loops(soup, bands) {
+    for l in loops {
         let n = l.len();
         let Some(first) = (0..n).find(|&k| nodes.contains(l[k])) else { continue };
         let mut chain = vec![l[first]];
