@@ -188,7 +188,7 @@ impl Graded {
 /// The vertices of `refined` along each declared girth's ring (module docs of
 /// [`crate::template::girth`]), by `ease_mm` name; `coarse` the decoded node
 /// positions (which nodes are ring nodes).
-fn girth_lines(
+pub fn girth_lines(
     t: &Template,
     body: &FeatureBody,
     coarse: &[glam::DVec3],

@@ -275,6 +275,8 @@ pub fn encode(draft: &Draft, body: &FeatureBody) -> Result<Template, CodecError>
         version: draft.version,
         description: draft.description.clone(),
         ease_mm: draft.ease_mm.clone(),
+        ease_range_mm: BTreeMap::new(),
+        design_body: None,
         nodes,
         edges,
         faces,

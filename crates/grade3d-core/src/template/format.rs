@@ -28,6 +28,8 @@ use crate::body::vocab::{CurveId, PointId, VOCABULARY_VERSION};
 use crate::geom::mesh::FaceId;
 use crate::geom::topology::{check_edge_uses, EdgeUse, TopologyError};
 
+pub use super::from_garment::DesignBody;
+
 /// Version of the template schema this build reads and writes.
 pub const SCHEMA_VERSION: u32 = 1;
 
@@ -371,6 +373,16 @@ pub struct Template {
     /// Ease at each girth the style defines, mm (garment girth − body girth).
     #[serde(default)]
     pub ease_mm: BTreeMap<String, f64>,
+    /// Seed 002 C6: per girth (by `ease_mm` name) the range `[min, max]` its
+    /// measured ease must stay within under sketch edits, mm
+    /// ([`super::edit`]); absent: no range.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub ease_range_mm: BTreeMap<String, [f64; 2]>,
+    /// The body the template was designed on, where sketch edits apply
+    /// ([`super::edit`]); `None`: the reference mannequin
+    /// ([`super::library::reference_body`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub design_body: Option<DesignBody>,
     /// Nodes `V^f`.
     pub nodes: Vec<Node>,
     /// Edge table.
@@ -580,6 +592,14 @@ impl Template {
         }
         if self.nodes.is_empty() || self.faces.is_empty() {
             return Err(TemplateError::Empty("no nodes or no faces"));
+        }
+        for (girth, &[lo, hi]) in &self.ease_range_mm {
+            if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
+                return Err(TemplateError::BadReference {
+                    element: format!("ease range of `{girth}`"),
+                    reason: format!("[{lo}, {hi}] mm is not a finite range with min ≤ max"),
+                });
+            }
         }
         for (i, n) in self.nodes.iter().enumerate() {
             if ![n.alpha, n.beta, n.gamma].iter().all(|x| x.is_finite())
@@ -824,6 +844,8 @@ mod tests {
             version: 1,
             description: String::new(),
             ease_mm: BTreeMap::new(),
+            ease_range_mm: BTreeMap::new(),
+            design_body: None,
             nodes: vec![
                 node(PointId::WaistFront, [0.0, 0.0, 0.1]),
                 node(PointId::WaistLeft, [0.1, 0.0, 0.0]),
@@ -861,6 +883,26 @@ mod tests {
         let back = Template::from_json(&t.to_json()).unwrap();
         assert_eq!(back, t);
         assert_eq!(t.face_nodes(0), [0, 1, 2]);
+    }
+
+    #[test]
+    fn an_ease_range_and_a_design_body_round_trip_and_a_reversed_range_is_named() {
+        let mut t = tiny();
+        t.ease_range_mm.insert("hip".into(), [20.0, 60.0]);
+        t.design_body = Some(DesignBody::MakehumanBase);
+        let text = t.to_json();
+        assert!(text.contains("\"design_body\": \"makehuman-base\""), "{text}");
+        assert_eq!(Template::from_json(&text).unwrap(), t, "pass the schema and round-trip");
+        t.ease_range_mm.insert("waist".into(), [30.0, 10.0]);
+        match t.validate() {
+            Err(TemplateError::BadReference { element, .. }) => assert_eq!(element, "ease range of `waist`"),
+            other => panic!("{other:?}"),
+        }
+        // the schema refuses a range that is not a pair, and an unknown body
+        let bad = tiny().to_json().replacen("\"ease_mm\": {}", "\"ease_mm\": {}, \"ease_range_mm\": {\"hip\": [1]}", 1);
+        assert!(matches!(Template::from_json(&bad), Err(TemplateError::Schema(_))), "{bad}");
+        let bad = tiny().to_json().replacen("\"ease_mm\": {}", "\"ease_mm\": {}, \"design_body\": \"moon\"", 1);
+        assert!(matches!(Template::from_json(&bad), Err(TemplateError::Schema(_))));
     }
 
     #[test]

@@ -63,7 +63,7 @@ use crate::geom::plane::Plane;
 use crate::geom::polyline::point_segment;
 
 /// The canonical orthographic views (module docs).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum CanonicalView {
     /// Looking at the body's front (along `−z`; `+x`, the body's left, on screen right).
@@ -78,7 +78,7 @@ pub enum CanonicalView {
 
 impl CanonicalView {
     /// `(r, d)`: the screen's right axis and the axis towards the viewer.
-    fn axes(self) -> (DVec3, DVec3) {
+    pub fn axes(self) -> (DVec3, DVec3) {
         match self {
             CanonicalView::Front => (DVec3::X, DVec3::Z),
             CanonicalView::Back => (DVec3::NEG_X, DVec3::NEG_Z),
@@ -89,7 +89,8 @@ impl CanonicalView {
 }
 
 /// A view to sketch in (module docs).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+#[serde(deny_unknown_fields)]
 pub struct SketchView {
     /// Which view.
     pub view: CanonicalView,
@@ -125,8 +126,8 @@ impl SketchView {
 }
 
 /// Knobs of the sketch edits.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+#[serde(default, deny_unknown_fields)]
 pub struct SketchOptions {
     /// An edge is selected when both its nodes lie within this many pixels
     /// of the stroke, `ε`. Default 4 (seed 000 §4.3).
