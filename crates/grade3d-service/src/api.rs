@@ -242,10 +242,10 @@ problem_responses! {
     Unauthorized: "A missing or invalid API key.",
     Forbidden: "Writes are disabled (no API key configured).",
     NotFound: "No such template, version, result, job or artefact.",
-    Conflict: "The template exists (replace it with PUT).",
+    Conflict: "The template exists (replace it with PUT), or it changed while an edit was made (edit it again).",
     TooLarge: "The body (or a scan's vertex count) exceeds the configured limit.",
     UnsupportedMedia: "The Content-Type is not one this route reads.",
-    Unprocessable: "Well-formed input the domain refuses (an unknown template, a body that is not a body, a template that does not fit).",
+    Unprocessable: "Well-formed input the domain refuses (an unknown template, a body that is not a body, a template that does not fit, a sketch edit that breaks a constraint).",
     Internal: "An internal error (nothing internal is disclosed).",
 }
 

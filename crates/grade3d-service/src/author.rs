@@ -162,5 +162,7 @@ pub fn author(parts: &AuthorParts) -> Result<(Template, Authored), AuthorRequest
         faces: a.template.faces.len(),
         units,
     };
-    Ok((a.template, report))
+    // the template records the body it was designed on: sketch edits apply there (issue #18 item 3)
+    let template = Template { design_body: Some(parts.body), ..a.template };
+    Ok((template, report))
 }

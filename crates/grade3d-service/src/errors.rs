@@ -28,9 +28,11 @@ use crate::pipeline::PipelineError;
 use crate::refine::clear::ClearError;
 use crate::refine::subdivide::RefineError;
 use crate::template::codec::CodecError;
+use crate::template::edit::EditError;
 use crate::template::format::TemplateError;
 use crate::template::from_garment::FromGarmentError;
 use crate::template::profile::ProfileError;
+use crate::template::sketch::SketchError;
 use grade3d_core::scan::ScanError;
 
 fn internal(what: &dyn std::fmt::Display) -> Problem {
@@ -48,6 +50,9 @@ impl From<StoreError> for Problem {
                 Problem::new(StatusCode::CONFLICT, "template-exists", "Template exists", e.to_string()).field("name")
             }
             StoreError::NameMismatch { .. } => Problem::bad_request("name-mismatch", e.to_string()).field("name"),
+            StoreError::Stale { .. } => {
+                Problem::new(StatusCode::CONFLICT, "template-changed", "Template changed", e.to_string()).field("name")
+            }
         }
     }
 }
@@ -78,6 +83,56 @@ impl From<AuthorRequestError> for Problem {
                 FromGarmentError::Simplify(_) => Problem::unprocessable("garment-contraction", detail).field("garment"),
                 FromGarmentError::Codec(_) => Problem::unprocessable("authoring-failed", detail).field("garment"),
             },
+        }
+    }
+}
+
+impl From<EditError> for Problem {
+    /// A sketch edit the core refuses (issue #18 items 3–4): the stroke's own
+    /// faults are 400s naming the field, every constraint a 422 whose slug
+    /// names it (`constraint-c12-…`, `constraint-c13-…`, `constraint-c6-…`,
+    /// `constraint-c8-…`, `constraint-symmetric`) and whose detail names the
+    /// node, edge, panel or girth.
+    fn from(e: EditError) -> Self {
+        let detail = e.to_string();
+        let c = |slug: &str, field: &str| Problem::unprocessable(slug, detail.clone()).field(field);
+        match &e {
+            EditError::Sketch(s) => match s {
+                SketchError::View { .. } => Problem::bad_request("sketch-view", detail).field("view"),
+                SketchError::ShortStroke { .. } | SketchError::NonFinite { .. } | SketchError::NoDirection => {
+                    Problem::bad_request("sketch-stroke", detail).field("edit.stroke")
+                }
+                SketchError::NothingSelected { .. } => c("sketch-nothing-selected", "edit.stroke"),
+                SketchError::EdgeOn => c("sketch-edge-on", "view"),
+                // the edge table of a stored (validated) template
+                SketchError::Index { .. } => internal(&detail),
+            },
+            EditError::NoNode { .. } => c("edit-no-such-node", "edit.node"),
+            EditError::Codec(_) => c("template-cannot-be-edited", "name"),
+            EditError::Profile { .. } => c("edit-profile", "edit.stroke"),
+            EditError::Template(_) => c("edit-invalid-template", "edit"),
+            EditError::Overridden { .. } => c("edit-overridden", "edit"),
+            EditError::NoCounterpart { .. } => c("constraint-symmetric", "edit"),
+            EditError::NodeInside { .. } => c("constraint-c12-inside-body", "edit.node"),
+            EditError::ProfileInside { .. } => c("constraint-c12-inside-body", "edit.stroke"),
+            EditError::NegativeEase { .. } => c("constraint-c12-negative-ease", "edit"),
+            EditError::ProfileCrosses { .. } | EditError::OutlineCrosses { .. } => {
+                c("constraint-c13-self-intersection", "edit")
+            }
+            EditError::EaseOutOfRange { .. } => c("constraint-c6-ease-range", "edit"),
+            EditError::GirthOrder { .. } => c("constraint-c8-girth-order", "edit"),
+            EditError::Refine(r) => match r {
+                // the edited garment itself: a face the edit folded flat, a profile it broke
+                RefineError::DegenerateFace { .. } | RefineError::Profile { .. } => c("edit-cannot-be-refined", "edit"),
+                RefineError::Topology(_)
+                | RefineError::IndexOutOfRange { .. }
+                | RefineError::NonFinitePosition { .. }
+                | RefineError::FixedFlags { .. }
+                | RefineError::EdgeTable { .. }
+                | RefineError::ProfileOnMissingEdge { .. }
+                | RefineError::TooLarge { .. } => internal(&detail),
+            },
+            EditError::Mesh(_) => internal(&detail),
         }
     }
 }

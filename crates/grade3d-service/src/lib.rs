@@ -7,6 +7,7 @@
 //! the OpenAPI document: [`api`], committed as `openapi.yaml`):
 //! - `GET /healthz`, `GET /readyz`, `GET /metrics`
 //! - `GET|POST /v1/templates`, `GET|PUT|DELETE /v1/templates/{name}`
+//! - `POST /v1/templates/from-garment`, `POST /v1/templates/{name}/edits` (sketch edits)
 //! - `POST /v1/grade/size-chart` (JSON or CSV), `POST /v1/grade/scan` (multipart)
 //! - `GET /v1/results/{id}`, `GET /v1/results/{id}/{artefact}`
 //! - `POST /v1/jobs`, `GET /v1/jobs/{id}`, `GET /v1/jobs/{id}/artefacts/{artefact}`
@@ -24,6 +25,7 @@ pub mod api;
 pub mod author;
 pub mod blocks;
 pub mod collide;
+pub mod edit;
 
 use std::path::PathBuf;
 use std::sync::{Arc, OnceLock};
@@ -335,6 +337,7 @@ pub fn routes() -> OpenApiRouter<AppState> {
         .routes(routes!(list_templates, create_template))
         .routes(routes!(get_template, replace_template, delete_template))
         .routes(routes!(create_template_from_garment))
+        .routes(routes!(edit_template))
         .routes(routes!(grade_size_chart))
         .routes(routes!(grade_scan))
         .routes(routes!(get_result))
@@ -747,6 +750,37 @@ async fn replace_template(
     let me = s.clone();
     let limit = s.0.cfg.request_timeout();
     Ok(Json(s.0.pool.run(limit, move || me.0.store.put(Some(&name), &text, false)).await??))
+}
+
+/// Apply a sketch edit to a template (issue #18 items 3–4; seed 000 §4, seed 002) and store it as the next version.
+#[utoipa::path(post, path = "/v1/templates/{name}/edits", tag = "templates", operation_id = "editTemplate",
+    security(("apiKey" = [])),
+    params(("name" = String, Path, description = "The template's name: its live version is edited.")),
+    request_body(content = crate::template::edit::SketchEdit, content_type = "application/json",
+        description = "A stroke in a canonical orthographic view (front, back, left, right; metres per pixel λ, the pixel of the world origin): `move_node` (a node and a direction stroke: Eq. (4), sign kept) or `profile` (a stroke re-profiling the visible edges within ε: Eqs. (6)–(7), the K(v) rules). Applied on the template's design body; moved nodes re-encoded by Eq. (1)."),
+    responses(
+        (status = 201, description = "Stored, durably, as the next version (the previous ones kept: undo is a PUT of an earlier version); what was resolved (mirrored edits) and the preview (coarse and refined garment GLB on the design body).",
+            body = edit::TemplateEdited,
+            headers(("Location" = String, description = "/v1/templates/{name}?version={version}"))),
+        (status = 404, response = api::NotFound),
+        (status = 409, response = api::Conflict),
+        api::WriteProblems,
+    ))]
+async fn edit_template(
+    State(s): State<AppState>,
+    headers: HeaderMap,
+    Path(name): Path<String>,
+    body: axum::body::Body,
+) -> Result<Response, Problem> {
+    let bytes = body_bytes(&s, &headers, body).await?;
+    check_key(&s, &headers, true)?;
+    valid_name(&name)?;
+    let request: crate::template::edit::SketchEdit = parse_json_body(&bytes)?;
+    let me = s.clone();
+    let limit = s.0.cfg.request_timeout();
+    let edited = s.0.pool.run(limit, move || edit::edit(&me, &name, &request)).await??;
+    let location = format!("/v1/templates/{}?version={}", edited.report.template.name, edited.report.template.version);
+    Ok((StatusCode::CREATED, [(header::LOCATION, location)], Json(edited)).into_response())
 }
 
 /// Delete a template (its versions stay readable by number).
@@ -1462,7 +1496,7 @@ mod tests {
     use http_body_util::BodyExt;
     use tower::ServiceExt;
 
-    fn state() -> (AppState, PathBuf) {
+    pub(crate) fn state() -> (AppState, PathBuf) {
         static N: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
         let dir = std::env::temp_dir().join(format!(
             "grade3d-svc-{}-{}",

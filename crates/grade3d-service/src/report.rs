@@ -33,6 +33,8 @@ pub enum Flow {
     Scan,
     /// Several bodies (a batch job's `bodies`).
     Bodies,
+    /// A sketch edit's preview (`POST /v1/templates/{name}/edits`).
+    SketchEdit,
 }
 
 /// One chart measurement as the fitted mannequin has it.
@@ -132,4 +134,6 @@ pub enum Report {
     SizeChart(SizeChartReport),
     /// A scan's or a batch of bodies'.
     Bodies(BodiesReport),
+    /// A sketch edit's (its preview's result).
+    SketchEdit(crate::edit::EditReport),
 }

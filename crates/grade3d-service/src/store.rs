@@ -44,6 +44,16 @@ pub enum StoreError {
     /// A create for a name that exists.
     #[error("template '{0}' exists; replace it with PUT to make a new version")]
     Exists(String),
+    /// An edit of a version that is no longer the live one.
+    #[error("template '{name}' is at version {live}, not {expected}: edit it again")]
+    Stale {
+        /// The name.
+        name: String,
+        /// The version the edit was made on.
+        expected: u32,
+        /// The live version.
+        live: u32,
+    },
     /// The body's name differs from the path's.
     #[error("template name '{body}' differs from the name in the path '{path}'")]
     NameMismatch {
@@ -167,6 +177,25 @@ impl TemplateStore {
         if let Some(p) = path_name.filter(|p| *p != t.name) {
             return Err(StoreError::NameMismatch { path: p.to_string(), body: t.name.clone() });
         }
+        self.write(t, create, None)
+    }
+
+    /// Stores `t`, an edit of version `based_on`, as the next version of
+    /// its name, its `version` field set to the number it is stored under.
+    /// Durable when this returns.
+    ///
+    /// # Errors
+    /// [`StoreError::Stale`] when `based_on` is no longer the live version
+    /// (another write came first); [`StoreError::NotFound`] for a deleted
+    /// name; [`StoreError::Invalid`], [`StoreError::Database`].
+    pub fn put_edit(&self, t: &Template, based_on: u32) -> Result<Entry, StoreError> {
+        // the schema too, as every stored document
+        self.write(Template::from_json(&t.to_json())?, false, Some(based_on))
+    }
+
+    /// Writes `t` as a new version (`create`: the first), `based_on` the
+    /// live version it must replace, if any (module docs).
+    fn write(&self, mut t: Template, create: bool, based_on: Option<u32>) -> Result<Entry, StoreError> {
         let tx = self.db.begin_write().map_err(db)?;
         let version;
         {
@@ -186,7 +215,13 @@ impl TemplateStore {
                 (false, None) => return Err(StoreError::NotFound { name: t.name.clone(), version: None }),
                 _ => {}
             }
+            if let Some(expected) = based_on.filter(|&b| live != Some(b)) {
+                return Err(StoreError::Stale { name: t.name.clone(), expected, live: live.unwrap_or(0) });
+            }
             version = highest + 1;
+            if based_on.is_some() {
+                t.version = version;
+            }
             versions.insert((t.name.as_str(), version), t.to_json().as_bytes()).map_err(db)?;
             current.insert(t.name.as_str(), version).map_err(db)?;
         }
@@ -258,6 +293,28 @@ mod tests {
                 Entry { name: "straight-skirt".into(), version: 2 },
             ]
         );
+        let _ = std::fs::remove_file(&path);
+    }
+
+    #[test]
+    fn an_edit_is_stored_as_the_next_version_numbered_as_stored_and_a_stale_one_is_refused() {
+        let path = temp("edit");
+        let lib = builtin().expect("library");
+        let store = TemplateStore::open(&path, &lib).expect("open");
+        let (v, skirt) = store.get("straight-skirt", None).unwrap();
+        let mut edited = skirt.clone();
+        edited.description = "edited".into();
+        edited.version = 77;
+        let e = store.put_edit(&edited, v).unwrap();
+        assert_eq!(e.version, v + 1);
+        let (_, back) = store.get("straight-skirt", Some(e.version)).unwrap();
+        assert_eq!(back, Template { version: v + 1, ..edited.clone() });
+        // an edit of version 1 after version 2 was stored: refused, nothing written
+        match store.put_edit(&edited, v) {
+            Err(StoreError::Stale { expected, live, .. }) => assert_eq!((expected, live), (v, v + 1)),
+            other => panic!("{other:?}"),
+        }
+        assert_eq!(store.get("straight-skirt", None).unwrap().0, v + 1);
         let _ = std::fs::remove_file(&path);
     }
 }

@@ -321,11 +321,7 @@ impl WorkContext {
     /// `t`'s block: graded on the reference body, its darts decided there.
     /// (Why not, in words, for the log: it is never a request's error.)
     fn block_of(&self, t: &Template) -> Result<DartPlan, String> {
-        static REFERENCE: std::sync::OnceLock<Result<FeatureBody, String>> = std::sync::OnceLock::new();
-        let body = REFERENCE
-            .get_or_init(|| crate::template::library::reference_body().map_err(|e| e.to_string()))
-            .as_ref()
-            .map_err(|e| format!("the reference body: {e}"))?;
+        let body = crate::edit::design_body(crate::template::from_garment::DesignBody::Reference)?;
         let obstacle = self.obstacle(&body.mesh, true, &mut Timer(BTreeMap::new())).map_err(|e| e.to_string())?;
         crate::pipeline::block(t, body, obstacle.as_deref(), &self.opts.grade)
             .map_err(|e| format!("graded on the reference body: {e}"))

@@ -1,0 +1,353 @@
+//! `POST /v1/templates/{name}/edits` (issue #18 items 3–4): one sketch edit
+//! (seed 000 §4) applied to the live version of a template on its design
+//! body and stored as the next version, the previous ones kept (undo is a
+//! `PUT` of an earlier version, read with `GET /v1/templates/{name}?version=N`).
+//!
+//! The geometry and the constraints of seed 002 are the core's
+//! [`crate::template::edit::apply_edit`]; this module runs it on the live
+//! version ([`edit`], on the bounded pool, called by the handler in
+//! `lib.rs`), stores the result only if no other write came first
+//! ([`crate::store::TemplateStore::put_edit`]: 409 otherwise), and keeps
+//! the preview — the coarse garment (decoded nodes and faces) and the
+//! refined garment on the design body, GLB — in the result cache as a
+//! grade's artefacts are kept, under the content address of the stored
+//! document: `GET /v1/results/{id}/{artefact}` serves them.
+//!
+//! Failure modes: the template's (404), the edit's (every refusal a
+//! problem naming the node, edge, panel, girth or constraint, mapped in
+//! `errors.rs`), a write that lost the race (409).
+
+use std::collections::BTreeMap;
+use std::sync::OnceLock;
+
+use serde::{Deserialize, Serialize};
+
+use crate::api::ArtefactLink;
+use crate::body::feature::FeatureBody;
+use crate::geom::mesh::TriMesh;
+use crate::io::gltf::write_glb;
+use crate::problem::Problem;
+use crate::results::{content_id, Stored};
+use crate::store::Entry;
+use crate::template::edit::{apply_edit, EditOptions, Resolution, SketchEdit};
+use crate::template::from_garment::DesignBody;
+use crate::work::Artefact;
+use crate::AppState;
+
+/// The feature model of a design body, built once per process.
+///
+/// # Errors
+/// The build's error, as text (the embedded model: never a request's error).
+pub fn design_body(which: DesignBody) -> Result<&'static FeatureBody, String> {
+    static REFERENCE: OnceLock<Result<FeatureBody, String>> = OnceLock::new();
+    static MAKEHUMAN_BASE: OnceLock<Result<FeatureBody, String>> = OnceLock::new();
+    let cell = match which {
+        DesignBody::Reference => &REFERENCE,
+        DesignBody::MakehumanBase => &MAKEHUMAN_BASE,
+    };
+    cell.get_or_init(|| crate::template::from_garment::design_body(which).map_err(|e| e.to_string()))
+        .as_ref()
+        .map_err(|e| format!("the design body {which:?}: {e}"))
+}
+
+/// What an edit did (the report of its preview's result, too).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+pub struct EditReport {
+    /// The new version: the template's name and the version it is stored as.
+    pub template: Entry,
+    /// The version the edit was applied to.
+    pub based_on: u32,
+    /// The body the edit was made on.
+    pub design_body: DesignBody,
+    /// Nodes moved (mirrored counterparts included), ascending.
+    pub moved_nodes: Vec<u32>,
+    /// Edges given new profiles (mirrored counterparts included), ascending.
+    pub edited_edges: Vec<u32>,
+    /// Constraints the edit kept by changing it (a mirrored edit, a centre
+    /// node kept on the symmetry plane) and placement rules it released.
+    pub resolved: Vec<Resolution>,
+    /// Each declared girth's ease on the design body after the edit, mm.
+    pub ease_mm: BTreeMap<String, f64>,
+}
+
+/// The preview's downloads.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+pub struct Preview {
+    /// The preview's result (`GET /v1/results/{id}`).
+    pub href: String,
+    /// `{name}-v{version}.coarse.glb` (the decoded nodes and faces) and
+    /// `{name}-v{version}.refined.glb` (the template's subdivision levels,
+    /// no collision), on the design body, metres.
+    pub artefacts: Vec<ArtefactLink>,
+}
+
+/// The answer of `POST /v1/templates/{name}/edits`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+pub struct TemplateEdited {
+    /// What the edit did.
+    pub report: EditReport,
+    /// The new version's document, as `GET /v1/templates/{name}?version=N` answers it.
+    #[schema(value_type = crate::api::TemplateDocument)]
+    pub document: serde_json::Value,
+    /// The coarse and refined garment on the design body.
+    pub preview: Preview,
+}
+
+fn glb(mesh: &TriMesh) -> Result<Vec<u8>, Problem> {
+    write_glb(mesh, None, &[], "grade3d").map_err(|e| {
+        tracing::error!(error = %e, "preview GLB");
+        Problem::internal()
+    })
+}
+
+/// Applies `request` to the live version of `name` and stores the result
+/// (module docs). Blocking: run it on the pool.
+///
+/// # Errors
+/// [`Problem`]: the store's, the edit's (422 naming what breaks), a preview
+/// that cannot be written (500).
+pub fn edit(s: &AppState, name: &str, request: &SketchEdit) -> Result<TemplateEdited, Problem> {
+    let (based_on, t) = s.0.store.get(name, None)?;
+    let which = t.design_body.unwrap_or_default();
+    let body = design_body(which).map_err(|e| {
+        tracing::error!(error = %e, "design body");
+        Problem::internal()
+    })?;
+    let edited = apply_edit(&t, body, request, &EditOptions::default())?;
+    let template = s.0.store.put_edit(&edited.template, based_on)?;
+    let (_, json) = s.0.store.get_json(name, Some(template.version))?;
+    let document: serde_json::Value = serde_json::from_str(&json).map_err(|e| {
+        tracing::error!(error = %e, "stored template JSON");
+        Problem::internal()
+    })?;
+    let id = content_id(&[b"sketch-edit", json.as_bytes()]);
+    let stem = format!("{name}-v{}", template.version);
+    let artefacts = vec![
+        Artefact { name: format!("{stem}.coarse.glb"), media_type: "model/gltf-binary", bytes: glb(&edited.coarse)? },
+        Artefact { name: format!("{stem}.refined.glb"), media_type: "model/gltf-binary", bytes: glb(&edited.refined)? },
+    ];
+    let report = EditReport {
+        template,
+        based_on,
+        design_body: which,
+        moved_nodes: edited.moved_nodes,
+        edited_edges: edited.edited_edges,
+        resolved: edited.resolved,
+        ease_mm: edited.ease_mm,
+    };
+    let report_json = serde_json::to_value(&report).map_err(|e| {
+        tracing::error!(error = %e, "edit report");
+        Problem::internal()
+    })?;
+    let summary = crate::summary(&id, crate::report::Flow::SketchEdit, report_json, BTreeMap::new(), &artefacts, None);
+    let preview = Preview { href: summary.href.clone(), artefacts: summary.artefacts.clone() };
+    s.0.results.put(id, Stored { summary, artefacts, expires: None });
+    Ok(TemplateEdited { report, document, preview })
+}
+
+#[cfg(test)]
+mod tests {
+    use axum::body::Body;
+    use axum::http::{header, Request, StatusCode};
+    use glam::DVec2;
+    use http_body_util::BodyExt;
+    use serde_json::{json, Value};
+    use tower::ServiceExt;
+
+    use super::*;
+    use crate::template::codec::decode;
+    use crate::template::format::Template;
+    use crate::template::sketch::{CanonicalView, SketchView};
+
+    async fn call(s: &AppState, req: Request<Body>) -> (StatusCode, header::HeaderMap, Vec<u8>) {
+        let resp = crate::app(s.clone()).oneshot(req).await.unwrap();
+        let (parts, body) = resp.into_parts();
+        (parts.status, parts.headers, body.collect().await.unwrap().to_bytes().to_vec())
+    }
+
+    fn post_edit(name: &str, edit: &Value, key: bool) -> Request<Body> {
+        let mut req =
+            Request::post(format!("/v1/templates/{name}/edits")).header(header::CONTENT_TYPE, "application/json");
+        if key {
+            req = req.header(header::AUTHORIZATION, "Bearer k");
+        }
+        req.body(Body::from(edit.to_string())).unwrap()
+    }
+
+    fn get(uri: &str) -> Request<Body> {
+        Request::get(uri).body(Body::empty()).unwrap()
+    }
+
+    fn put(name: &str, doc: &str) -> Request<Body> {
+        Request::put(format!("/v1/templates/{name}"))
+            .header(header::AUTHORIZATION, "Bearer k")
+            .header(header::CONTENT_TYPE, "application/json")
+            .body(Body::from(doc.to_owned()))
+            .unwrap()
+    }
+
+    /// A node move: `(dx, dy)` pixels at 1 mm per pixel in `view`.
+    fn move_node(view: &str, node: u32, dx: f64, dy: f64) -> Value {
+        json!({
+            "view": {"view": view, "metres_per_px": 0.001, "origin_px": [500.0, 500.0]},
+            "edit": {"kind": "move_node", "node": node, "stroke": [[100.0, 100.0], [100.0 + dx, 100.0 + dy]]}
+        })
+    }
+
+    fn json_of(bytes: &[u8]) -> Value {
+        serde_json::from_slice(bytes).unwrap()
+    }
+
+    #[tokio::test]
+    async fn an_edit_is_stored_as_the_next_version_round_trips_through_get_and_is_undone_by_a_put() {
+        let (s, dir) = crate::tests::state();
+        let edit = move_node("right", 17, 20.0, 1.0);
+        // a write: the key is needed
+        assert_eq!(call(&s, post_edit("straight-skirt", &edit, false)).await.0, StatusCode::UNAUTHORIZED);
+        let (status, headers, body) = call(&s, post_edit("straight-skirt", &edit, true)).await;
+        assert_eq!(status, StatusCode::CREATED, "{}", String::from_utf8_lossy(&body));
+        assert_eq!(headers[header::LOCATION], "/v1/templates/straight-skirt?version=2");
+        let answer: TemplateEdited = serde_json::from_slice(&body).unwrap();
+        assert_eq!((answer.report.template.version, answer.report.based_on), (2, 1));
+        assert_eq!(answer.report.moved_nodes, vec![17]);
+        assert_eq!(answer.report.resolved, vec![Resolution::Released { node: 17, rule: "drop".into() }]);
+        assert_eq!(answer.document["version"], 2);
+        // the stored version is what the edit returned
+        let (status, headers, stored) = call(&s, get("/v1/templates/straight-skirt?version=2")).await;
+        assert_eq!((status, &headers["x-template-version"]), (StatusCode::OK, &"2".parse().unwrap()));
+        assert_eq!(json_of(&stored), answer.document);
+        let (_, headers, live) = call(&s, get("/v1/templates/straight-skirt")).await;
+        assert_eq!((headers["x-template-version"].to_str().unwrap(), json_of(&live)), ("2", answer.document.clone()));
+        // the node moved 20 mm along +z on the design body
+        let body = design_body(DesignBody::Reference).unwrap();
+        let (v1, v2) = (
+            s.0.store.get("straight-skirt", Some(1)).unwrap().1,
+            Template::from_json(&String::from_utf8(stored).unwrap()).unwrap(),
+        );
+        let (m1, m2) =
+            (decode(&v1, body, v1.defaults.relocation).unwrap(), decode(&v2, body, v2.defaults.relocation).unwrap());
+        assert!((m2.positions[17] - m1.positions[17] - glam::DVec3::Z * 0.02).length() < 1e-9);
+        // the preview's GLBs download
+        assert_eq!(answer.preview.artefacts.len(), 2);
+        for a in &answer.preview.artefacts {
+            let (status, headers, bytes) = call(&s, get(&a.href)).await;
+            assert_eq!(
+                (status, headers[header::CONTENT_TYPE].to_str().unwrap()),
+                (StatusCode::OK, "model/gltf-binary")
+            );
+            assert_eq!((&bytes[..4], bytes.len()), (&b"glTF"[..], a.bytes));
+        }
+        let (status, _, result) = call(&s, get(&answer.preview.href)).await;
+        assert_eq!(status, StatusCode::OK);
+        assert_eq!(json_of(&result)["report"], serde_json::to_value(&answer.report).unwrap());
+        // undo: PUT of version 1 makes version 3, equal to version 1 but for its number
+        let (_, _, old) = call(&s, get("/v1/templates/straight-skirt?version=1")).await;
+        let (status, _, entry) = call(&s, put("straight-skirt", &String::from_utf8(old).unwrap())).await;
+        assert_eq!((status, json_of(&entry)["version"].clone()), (StatusCode::OK, json!(3)));
+        let (_, headers, live) = call(&s, get("/v1/templates/straight-skirt")).await;
+        assert_eq!(headers["x-template-version"], "3");
+        let v3 = Template::from_json(&String::from_utf8(live).unwrap()).unwrap();
+        assert_eq!(v3, v1);
+        assert_ne!(v3.nodes[17], v2.nodes[17]);
+        // and an edit now applies to version 3
+        let (status, _, body) = call(&s, post_edit("straight-skirt", &edit, true)).await;
+        assert_eq!(status, StatusCode::CREATED);
+        assert_eq!(json_of(&body)["report"]["based_on"], 3);
+        let _ = std::fs::remove_dir_all(dir);
+    }
+
+    #[tokio::test]
+    async fn a_mirrored_edit_says_so_and_lands_on_both_sides() {
+        let (s, dir) = crate::tests::state();
+        let (status, _, body) = call(&s, post_edit("trousers", &move_node("front", 27, 10.0, 0.0), true)).await;
+        assert_eq!(status, StatusCode::CREATED, "{}", String::from_utf8_lossy(&body));
+        let answer: TemplateEdited = serde_json::from_slice(&body).unwrap();
+        assert_eq!(answer.report.resolved, vec![Resolution::MirroredNode { node: 27, counterpart: 36 }]);
+        assert_eq!(answer.report.moved_nodes, vec![27, 36]);
+        let json = json_of(&body);
+        assert_eq!(json["report"]["resolved"][0]["kind"], "mirrored_node");
+        let _ = std::fs::remove_dir_all(dir);
+    }
+
+    /// The skirt's front hem edge 17–18 in the front view at 1 mm per pixel, and a stroke over it
+    /// with an X in its middle.
+    fn looped_stroke() -> Value {
+        let body = design_body(DesignBody::Reference).unwrap();
+        let skirt = crate::template::library::builtin().unwrap().remove(0);
+        let m = decode(&skirt, body, skirt.defaults.relocation).unwrap();
+        let view = SketchView { view: CanonicalView::Front, metres_per_px: 0.001, origin_px: [500.0, 500.0] };
+        let (a, b) = (view.to_px(m.positions[17]), view.to_px(m.positions[18]));
+        let at = |t: f64, up: f64| a.lerp(b, t) + DVec2::new(0.0, -up);
+        let mut pts: Vec<DVec2> = (0..=16).map(|i| at(i as f64 / 40.0, 0.0)).collect();
+        pts.extend([at(0.6, 10.0), at(0.5, 20.0), at(0.4, 10.0), at(0.6, -5.0)]);
+        pts.extend((25..=40).map(|i| at(i as f64 / 40.0, 0.0)));
+        let stroke: Vec<[f64; 2]> = pts.iter().map(|q| [q.x, q.y]).collect();
+        json!({
+            "view": {"view": "front", "metres_per_px": 0.001, "origin_px": [500.0, 500.0]},
+            "edit": {"kind": "profile", "stroke": stroke}
+        })
+    }
+
+    #[tokio::test]
+    async fn every_refusal_is_a_problem_naming_the_constraint_and_what_breaks_it_and_stores_nothing() {
+        let (s, dir) = crate::tests::state();
+        // C6 needs a declared range: the trousers' knee within [0, 160] mm (measured 154.5)
+        let (mut trousers, _) = (s.0.store.get("trousers", None).unwrap().1, ());
+        trousers.ease_range_mm.insert("knee".into(), [0.0, 160.0]);
+        assert_eq!(call(&s, put("trousers", &trousers.to_json())).await.0, StatusCode::OK);
+        // C12's ease: the left waist node lifted off the waist, kept …
+        assert_eq!(
+            call(&s, post_edit("straight-skirt", &move_node("front", 2, 0.0, -40.0), true)).await.0,
+            StatusCode::CREATED
+        );
+        let cases: Vec<(&str, Value, u16, &str, &[&str])> = vec![
+            ("straight-skirt", move_node("front", 18, -120.0, 0.0), 422, "constraint-c12-inside-body", &["node 18"]),
+            // … then its neighbour too: the waist line no longer goes round the waist
+            ("straight-skirt", move_node("front", 3, 0.0, -40.0), 422, "constraint-c12-negative-ease", &["`waist`"]),
+            ("straight-skirt", looped_stroke(), 422, "constraint-c13-self-intersection", &["edge 38"]),
+            (
+                "straight-skirt",
+                move_node("front", 17, 0.0, -600.0),
+                422,
+                "constraint-c13-self-intersection",
+                &["panel `front`"],
+            ),
+            (
+                "trousers",
+                move_node("front", 26, -60.0, 0.0),
+                422,
+                "constraint-c6-ease-range",
+                &["`knee`", "[0, 160] mm"],
+            ),
+            (
+                "straight-skirt",
+                move_node("front", 0, 0.0, 250.0),
+                422,
+                "constraint-c8-girth-order",
+                &["`waist`", "`hip`", "node 0"],
+            ),
+            ("straight-skirt", move_node("right", 1, 5.0, 0.0), 422, "edit-overridden", &["node 1", "`waist`"]),
+            ("straight-skirt", move_node("front", 99, 5.0, 0.0), 422, "edit-no-such-node", &["node 99"]),
+            ("straight-skirt", move_node("front", 17, 0.0, 0.0), 400, "sketch-stroke", &["no length"]),
+            ("nope", move_node("front", 1, 5.0, 0.0), 404, "not-found", &["nope"]),
+        ];
+        for (name, edit, status, slug, named) in cases {
+            let before = s.0.store.get(name, None).ok().map(|e| e.0);
+            let (got, headers, body) = call(&s, post_edit(name, &edit, true)).await;
+            let problem = json_of(&body);
+            assert_eq!(got.as_u16(), status, "{slug}: {problem}");
+            assert_eq!(headers[header::CONTENT_TYPE], crate::problem::PROBLEM_JSON);
+            assert!(problem["type"].as_str().unwrap().ends_with(slug), "{slug}: {problem}");
+            let detail = problem["detail"].as_str().unwrap();
+            for n in named {
+                assert!(detail.contains(n), "{slug}: `{n}` not in {detail}");
+            }
+            assert_eq!(s.0.store.get(name, None).ok().map(|e| e.0), before, "{slug}: nothing stored");
+        }
+        // a field the edit does not have
+        let mut bad = move_node("front", 17, 5.0, 0.0);
+        bad["colour"] = json!("red");
+        assert_eq!(call(&s, post_edit("straight-skirt", &bad, true)).await.0, StatusCode::BAD_REQUEST);
+        let _ = std::fs::remove_dir_all(dir);
+    }
+}
