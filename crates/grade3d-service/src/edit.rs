@@ -198,6 +198,18 @@ mod tests {
         serde_json::from_slice(bytes).unwrap()
     }
 
+    /// The schema errors of `instance` against the contract's component `name`.
+    fn schema_errors(name: &str, instance: &Value) -> Vec<String> {
+        let doc = serde_json::to_value(crate::api::openapi()).unwrap();
+        let schema = json!({
+            "$schema": "https://json-schema.org/draft/2020-12/schema",
+            "$ref": format!("#/components/schemas/{name}"),
+            "components": doc["components"],
+        });
+        let v = jsonschema::validator_for(&schema).unwrap();
+        v.iter_errors(instance).take(10).map(|e| format!("{e} at {}", e.instance_path())).collect()
+    }
+
     #[tokio::test]
     async fn an_edit_is_stored_as_the_next_version_round_trips_through_get_and_is_undone_by_a_put() {
         let (s, dir) = crate::tests::state();
@@ -212,6 +224,11 @@ mod tests {
         assert_eq!(answer.report.moved_nodes, vec![17]);
         assert_eq!(answer.report.resolved, vec![Resolution::Released { node: 17, rule: "drop".into() }]);
         assert_eq!(answer.document["version"], 2);
+        // the answer is what the contract says (and a planted violation is caught)
+        let mut answer_json = json_of(&body);
+        assert_eq!(schema_errors("TemplateEdited", &answer_json), Vec::<String>::new());
+        answer_json["report"]["resolved"][0]["node"] = json!("seventeen");
+        assert!(!schema_errors("TemplateEdited", &answer_json).is_empty());
         // the stored version is what the edit returned
         let (status, headers, stored) = call(&s, get("/v1/templates/straight-skirt?version=2")).await;
         assert_eq!((status, &headers["x-template-version"]), (StatusCode::OK, &"2".parse().unwrap()));
@@ -240,6 +257,7 @@ mod tests {
         let (status, _, result) = call(&s, get(&answer.preview.href)).await;
         assert_eq!(status, StatusCode::OK);
         assert_eq!(json_of(&result)["report"], serde_json::to_value(&answer.report).unwrap());
+        assert_eq!(schema_errors("GradeResult", &json_of(&result)), Vec::<String>::new());
         // undo: PUT of version 1 makes version 3, equal to version 1 but for its number
         let (_, _, old) = call(&s, get("/v1/templates/straight-skirt?version=1")).await;
         let (status, _, entry) = call(&s, put("straight-skirt", &String::from_utf8(old).unwrap())).await;

@@ -743,13 +743,20 @@ async fn replace_template(
     Path(name): Path<String>,
     body: axum::body::Body,
 ) -> Result<Json<store::Entry>, Problem> {
-    let bytes = body_bytes(&s, &headers, body).await?;
-    check_key(&s, &headers, true)?;
-    valid_name(&name)?;
-    let text = utf8(bytes)?;
+    let text = utf8(named_write(&s, &headers, &name, body).await?)?;
     let me = s.clone();
     let limit = s.0.cfg.request_timeout();
     Ok(Json(s.0.pool.run(limit, move || me.0.store.put(Some(&name), &text, false)).await??))
+}
+
+/// The body of a write to the template `name`: read within the limit (before
+/// the key is checked: a refusal mid-upload would break the client's pipe),
+/// the key checked, the name a valid one.
+async fn named_write(s: &AppState, headers: &HeaderMap, name: &str, body: axum::body::Body) -> Result<Bytes, Problem> {
+    let bytes = body_bytes(s, headers, body).await?;
+    check_key(s, headers, true)?;
+    valid_name(name)?;
+    Ok(bytes)
 }
 
 /// Apply a sketch edit to a template (issue #18 items 3–4; seed 000 §4, seed 002) and store it as the next version.
@@ -772,13 +779,9 @@ async fn edit_template(
     Path(name): Path<String>,
     body: axum::body::Body,
 ) -> Result<Response, Problem> {
-    let bytes = body_bytes(&s, &headers, body).await?;
-    check_key(&s, &headers, true)?;
-    valid_name(&name)?;
-    let request: crate::template::edit::SketchEdit = parse_json_body(&bytes)?;
+    let request: crate::template::edit::SketchEdit = parse_json_body(&named_write(&s, &headers, &name, body).await?)?;
     let me = s.clone();
-    let limit = s.0.cfg.request_timeout();
-    let edited = s.0.pool.run(limit, move || edit::edit(&me, &name, &request)).await??;
+    let edited = s.0.pool.run(s.0.cfg.request_timeout(), move || edit::edit(&me, &name, &request)).await??;
     let location = format!("/v1/templates/{}?version={}", edited.report.template.name, edited.report.template.version);
     Ok((StatusCode::CREATED, [(header::LOCATION, location)], Json(edited)).into_response())
 }
@@ -1557,7 +1560,7 @@ mod tests {
                 assert!(!text.contains("no such route"), "{method} {path} is documented but not routed: {text}");
             }
         }
-        assert_eq!(operations, 17, "the service's 17 operations");
+        assert_eq!(operations, 18, "the service's 18 operations");
         // the reverse: no route bypasses the documented list
         let code = include_str!("lib.rs");
         let code = &code[..code.find("#[cfg(test)]").unwrap_or(code.len())];

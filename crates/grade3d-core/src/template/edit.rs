@@ -526,28 +526,21 @@ fn mirrored(t: &Template, m: &CoarseMesh, mirror: &Mirror, mut asked: Targets) -
 
 /// Removes node `v`'s placement rules from `t`, naming those removed.
 fn release(t: &mut Template, v: u32) -> Vec<&'static str> {
-    let mut out = Vec::new();
-    let mut drop_where = |n: usize, before: usize, rule: &'static str| {
-        if n < before {
-            out.push(rule);
-        }
-    };
-    let before = t.on_curve.len();
-    t.on_curve.retain(|c| c.node != v);
-    drop_where(t.on_curve.len(), before, "on_curve");
-    let before = t.between.len();
-    t.between.retain(|c| c.node != v);
-    drop_where(t.between.len(), before, "between");
-    let before = t.below.len();
-    t.below.retain(|c| c.node != v);
-    drop_where(t.below.len(), before, "below");
-    let before = t.drops.len();
-    t.drops.retain(|c| c.node != v);
-    drop_where(t.drops.len(), before, "drop");
-    let before = t.hangs.len();
-    t.hangs.retain(|c| c.node != v);
-    drop_where(t.hangs.len(), before, "hang");
-    out
+    fn without<T>(rules: &mut Vec<T>, v: u32, node: impl Fn(&T) -> u32) -> bool {
+        let before = rules.len();
+        rules.retain(|r| node(r) != v);
+        rules.len() < before
+    }
+    [
+        ("on_curve", without(&mut t.on_curve, v, |r| r.node)),
+        ("between", without(&mut t.between, v, |r| r.node)),
+        ("below", without(&mut t.below, v, |r| r.node)),
+        ("drop", without(&mut t.drops, v, |r| r.node)),
+        ("hang", without(&mut t.hangs, v, |r| r.node)),
+    ]
+    .into_iter()
+    .filter_map(|(rule, removed)| removed.then_some(rule))
+    .collect()
 }
 
 /// Step 4: the edited template (module docs).
@@ -874,8 +867,7 @@ pub fn apply_edit(
     check_crossings(t, &before.m, &after.m, &tg)?;
     check_order(t, body, &before.m, &after.m, &tg)?;
     check_ease(&new, &before.ease, &after.ease)?;
-    let coarse =
-        TriMesh::new(after.m.positions.clone(), after.m.triangles.iter().map(|f| f.map(|v| VertexId(v))).collect())?;
+    let coarse = TriMesh::new(after.m.positions.clone(), after.m.triangles.iter().map(|f| f.map(VertexId)).collect())?;
     Ok(Edited {
         template: new,
         moved_nodes: tg.nodes.keys().copied().collect(),
@@ -1089,6 +1081,22 @@ mod tests {
         assert!(after.positions[36].distance(image) < 1e-6, "{}", after.positions[36].distance(image));
         // the counterpart moved by 10 mm too (the body is symmetric)
         assert!((after.positions[36].distance(before.positions[36]) - 0.01).abs() < 1e-4);
+    }
+
+    #[test]
+    fn symmetric_a_node_whose_counterpart_is_not_at_its_mirror_image_is_refused() {
+        let f = fixture();
+        // the right front hem node 30 mm off along its normal: nothing within 10 mm of 27's image
+        let mut t = f.trousers.clone();
+        t.nodes[36].alpha += 0.03;
+        match move_by(&t, 27, CanonicalView::Front, 10.0, 0.0) {
+            Err(EditError::NoCounterpart { element, panel, tolerance_mm }) => {
+                assert_eq!((element.as_str(), panel.as_str(), tolerance_mm), ("node 27", "left_front", 10.0));
+            }
+            other => panic!("{:?}", other.map(|e| e.resolved)),
+        }
+        // a node on no mirror-pair panel is edited alone: the skirt declares no pairs
+        assert_eq!(move_by(&f.skirt, 17, CanonicalView::Front, 10.0, 0.0).unwrap().moved_nodes, vec![17]);
     }
 
     #[test]
