@@ -313,6 +313,16 @@ mod tests {
         let (mut trousers, _) = (s.0.store.get("trousers", None).unwrap().1, ());
         trousers.ease_range_mm.insert("knee".into(), [0.0, 160.0]);
         assert_eq!(call(&s, put("trousers", &trousers.to_json())).await.0, StatusCode::OK);
+        // symmetric: the right front hem node 30 mm off the left one's mirror image
+        let (mut off, _) = (s.0.store.get("trousers", None).unwrap().1, ());
+        off.name = "lopsided".into();
+        off.nodes[36].alpha += 0.03;
+        let create = Request::post("/v1/templates")
+            .header(header::AUTHORIZATION, "Bearer k")
+            .header(header::CONTENT_TYPE, "application/json")
+            .body(Body::from(off.to_json()))
+            .unwrap();
+        assert_eq!(call(&s, create).await.0, StatusCode::CREATED);
         // C12's ease: the left waist node lifted off the waist, kept …
         assert_eq!(
             call(&s, post_edit("straight-skirt", &move_node("front", 2, 0.0, -40.0), true)).await.0,
@@ -320,6 +330,9 @@ mod tests {
         );
         let cases: Vec<(&str, Value, u16, &str, &[&str])> = vec![
             ("straight-skirt", move_node("front", 18, -120.0, 0.0), 422, "constraint-c12-inside-body", &["node 18"]),
+            // the lifted waist node 12 mm in: outside the body, but its arc to node 1 cuts in
+            ("straight-skirt", move_node("front", 2, -12.0, 0.0), 422, "constraint-c12-inside-body", &["edge 7"]),
+            ("lopsided", move_node("front", 27, 10.0, 0.0), 422, "constraint-symmetric", &["node 27", "left_front"]),
             // … then its neighbour too: the waist line no longer goes round the waist
             ("straight-skirt", move_node("front", 3, 0.0, -40.0), 422, "constraint-c12-negative-ease", &["`waist`"]),
             ("straight-skirt", looped_stroke(), 422, "constraint-c13-self-intersection", &["edge 38"]),

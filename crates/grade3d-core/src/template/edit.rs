@@ -997,6 +997,23 @@ mod tests {
     }
 
     #[test]
+    fn c12_a_profile_that_a_move_bends_into_the_body_is_named_with_its_edge() {
+        let f = fixture();
+        // the left waist node 40 mm up, then 12 mm in: 1.4 mm outside the body there, but its arc
+        // to node 1 (edge 7), carried by Eq. (5), cuts into it
+        let up = move_by(&f.skirt, 2, CanonicalView::Front, 0.0, -40.0).unwrap();
+        match move_by(&up.template, 2, CanonicalView::Front, -12.0, 0.0) {
+            Err(EditError::ProfileInside { edge, depth_mm, .. }) => {
+                assert_eq!(edge, edge_between(&f.skirt, 1, 2).unwrap());
+                assert!(depth_mm > 0.0, "{depth_mm}");
+            }
+            other => panic!("{:?}", other.map(|e| e.resolved)),
+        }
+        // 6 mm in is kept
+        assert!(move_by(&up.template, 2, CanonicalView::Front, -6.0, 0.0).is_ok());
+    }
+
+    #[test]
     fn c12_a_profile_point_inside_the_body_is_named_with_its_edge() {
         // planted: one point of edge 17–18's profile put on a point inside the body (the hip's centre)
         let f = fixture();
