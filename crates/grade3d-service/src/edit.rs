@@ -287,6 +287,37 @@ mod tests {
         let _ = std::fs::remove_dir_all(dir);
     }
 
+    #[tokio::test]
+    async fn an_edit_is_made_on_the_templates_design_body() {
+        let (s, dir) = crate::tests::state();
+        // the skirt, declared designed on MakeHuman's base mesh
+        let mut skirt = s.0.store.get("straight-skirt", None).unwrap().1;
+        skirt.name = "base-skirt".into();
+        skirt.design_body = Some(DesignBody::MakehumanBase);
+        let create = Request::post("/v1/templates")
+            .header(header::AUTHORIZATION, "Bearer k")
+            .header(header::CONTENT_TYPE, "application/json")
+            .body(Body::from(skirt.to_json()))
+            .unwrap();
+        assert_eq!(call(&s, create).await.0, StatusCode::CREATED);
+        let (status, _, body) = call(&s, post_edit("base-skirt", &move_node("right", 17, 20.0, 0.0), true)).await;
+        assert_eq!(status, StatusCode::CREATED, "{}", String::from_utf8_lossy(&body));
+        let answer: TemplateEdited = serde_json::from_slice(&body).unwrap();
+        assert_eq!(answer.report.design_body, DesignBody::MakehumanBase);
+        let edited = Template::from_json(&answer.document.to_string()).unwrap();
+        assert_eq!(edited.design_body, Some(DesignBody::MakehumanBase), "kept by the edit");
+        // 20 mm along +z on the base mesh, exactly; not so on the reference body
+        let at = |t: &Template, which| {
+            let body = design_body(which).unwrap();
+            decode(t, body, t.defaults.relocation).unwrap().positions[17]
+        };
+        let moved = at(&edited, DesignBody::MakehumanBase) - at(&skirt, DesignBody::MakehumanBase);
+        assert!((moved - glam::DVec3::Z * 0.02).length() < 1e-9, "{moved}");
+        let elsewhere = at(&edited, DesignBody::Reference) - at(&skirt, DesignBody::Reference);
+        assert!((elsewhere - glam::DVec3::Z * 0.02).length() > 1e-4, "{elsewhere}");
+        let _ = std::fs::remove_dir_all(dir);
+    }
+
     /// The skirt's front hem edge 17–18 in the front view at 1 mm per pixel, and a stroke over it
     /// with an X in its middle.
     fn looped_stroke() -> Value {
