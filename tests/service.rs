@@ -382,7 +382,26 @@ fn a_template_is_authored_from_a_garment() {
     // stored: read back as a valid template, and graded like any other
     let r = call("GET", &s.url("/v1/templates/authored-skirt"), &[], None);
     assert_eq!(r.status, 200);
-    grade3d::template::format::Template::from_json(&r.text()).unwrap();
+    let authored = grade3d::template::format::Template::from_json(&r.text()).unwrap();
+    // it records the body it was designed on, where a sketch edit applies: the lowest node (on the
+    // hem) 10 mm forward, a 10-pixel stroke to the right in the right view at 1 mm per pixel
+    assert_eq!(r.json()["design_body"], "makehuman-base");
+    let hem = (0..authored.nodes.len())
+        .min_by(|&a, &b| authored.nodes[a].reference[1].total_cmp(&authored.nodes[b].reference[1]));
+    let edit = serde_json::json!({
+        "view": {"view": "right", "metres_per_px": 0.001, "origin_px": [500.0, 500.0]},
+        "edit": {"kind": "move_node", "node": hem.unwrap(), "stroke": [[100.0, 100.0], [110.0, 100.0]]}
+    });
+    let a = auth();
+    let r = call(
+        "POST",
+        &s.url("/v1/templates/authored-skirt/edits"),
+        &[json_ct(), (a.0, a.1.as_str())],
+        Some(edit.to_string().as_bytes()),
+    );
+    assert_eq!(r.status, 201, "{}", r.text());
+    assert_eq!(r.json()["report"]["design_body"], "makehuman-base");
+    assert_eq!(r.json()["document"]["version"], 2);
     let job = format!(r#"{{"templates":["authored-skirt"],"chart":{CHART},"base_size":"S"}}"#);
     let r = call("POST", &s.url("/v1/grade/size-chart"), &[json_ct()], Some(job.as_bytes()));
     assert_eq!(r.status, 200, "{}", r.text());
