@@ -9,9 +9,11 @@
 //!   both directions (graded → designed, designed → graded);
 //! * the authored skirt graded on every fixture body and ASTM size passes
 //!   the bars of issues #7/#8 (`common/bars.rs`), but for the strain bar:
-//!   its designed surface does not flatten within 4 % p95 on its own design
-//!   body (front 4.5 %, back 7.3 %, its two darts per piece decided there),
-//!   so its pieces are held to [`SKIRT_STRAIN_CEILING`], a guard against
+//!   on its own design body it flattens within it (front 3.0 %, back
+//!   3.2 % p95, with the darts decided there), but not on every other body
+//!   (up to 9 %: the design's close fit over the seat and thighs, carried
+//!   by Below/Between, strains where another body's seat differs), so its
+//!   pieces are held to [`SKIRT_STRAIN_CEILING`], a guard against
 //!   regressions, not the bar. The bodysuit (helper-tights) is held to the
 //!   round trip only: its sleeves have no arm girths to follow (issue #18,
 //!   item 5) and its feet are closed; graded on other bodies its sleeves
@@ -20,14 +22,12 @@
 use std::sync::OnceLock;
 
 use grade3d::body::derive::{derive_features, DeriveOptions};
-use grade3d::body::feature::FeatureBody;
 use grade3d::collide::cache::Obstacle;
 use grade3d::collide::render::{RenderOptions, Renderer, RendererChoice};
 use grade3d::collide::DepthRenderer;
 use grade3d::geom::mesh::TriMesh;
 use grade3d::geom::query::SphereIndex;
 use grade3d::geom::winding::{WindingOptions, WindingTree};
-use grade3d::io::gltf::read_mesh;
 use grade3d::mannequin::landmarks::hm08_landmarks;
 use grade3d::mannequin::model::BodyModel;
 use grade3d::pattern::garment::DartSource;
@@ -35,18 +35,15 @@ use grade3d::pipeline::{block, grade, grade_with_darts, GradeOptions};
 use grade3d::template::codec::decode;
 use grade3d::template::format::{Relocation, Template};
 use grade3d::template::from_garment::{author_from_garment, Authored, GarmentOptions, TubeCut};
-use grade3d::template::garment_panels::PanelMesh;
 
 mod common;
-use common::{fixture_bodies, fixtures};
+use common::fixture_bodies;
 
+#[path = "common/authored.rs"]
+mod authored;
 #[path = "common/bars.rs"]
 mod bars;
-
-/// The authored skirt's strain ceiling (p95 edge strain; module docs):
-/// measured 12.9 % at worst over the 20 fixture bodies (16.4 % over the
-/// issue #7 population, run once, not in CI).
-const SKIRT_STRAIN_CEILING: f64 = 0.17;
+use authored::{design_body, garment, SKIRT_STRAIN_CEILING};
 
 /// How far decoding on the design body may put a node from where authoring
 /// stored it, m.
@@ -69,30 +66,6 @@ fn obstacle(mesh: &TriMesh) -> Obstacle {
     }
 }
 
-/// MakeHuman's base mesh with its features: the helpers' design body.
-fn design_body() -> &'static FeatureBody {
-    static B: OnceLock<FeatureBody> = OnceLock::new();
-    B.get_or_init(|| {
-        let model = BodyModel::embedded().unwrap();
-        let base = model.base_mesh().unwrap();
-        let lm = hm08_landmarks(model, &base, &Default::default()).unwrap();
-        derive_features(base, &lm, &DeriveOptions::default()).unwrap()
-    })
-}
-
-/// A fixture garment as one piece (MakeHuman's helpers are single meshes).
-fn garment(name: &str) -> PanelMesh {
-    let m = read_mesh(&std::fs::read(fixtures().join(format!("garments/{name}.glb"))).unwrap(), &Default::default())
-        .unwrap()
-        .welded(1e-9)
-        .unwrap();
-    PanelMesh {
-        name: name.trim_start_matches("helper-").to_owned(),
-        positions: m.positions().to_vec(),
-        triangles: m.triangles().iter().map(|t| t.map(|v| v.0)).collect(),
-    }
-}
-
 /// The two authored templates: the skirt cut at its sides, the tights (a
 /// bodysuit) at the armscyes, sides and centre.
 fn authored() -> &'static [(String, Authored)] {
@@ -102,7 +75,8 @@ fn authored() -> &'static [(String, Authored)] {
             .into_iter()
             .map(|(name, cut)| {
                 let opts = GarmentOptions { cut, ..Default::default() };
-                let a = author_from_garment(name, &[garment(name)], design_body(), &opts).unwrap();
+                let a = author_from_garment(name, &[garment(name)], design_body(), &opts)
+                    .unwrap_or_else(|e| panic!("{name}: {e:?}"));
                 (name.to_owned(), a)
             })
             .collect()
@@ -243,4 +217,63 @@ fn regression_the_authored_skirt_decodes_on_pop39() {
             assert!(ring.contains(&(i as u32)), "node {i} is tied to {} but is no ring node", n.point);
         }
     }
+}
+
+/// Regression (the literal failing inputs, issue #7's population,
+/// `sample_population(40, 13)`): the authored skirt on pop15-m-slim-tall
+/// had 15 flipped triangles in its front, and on pop09-m-slim-short's
+/// scan-like copy seam mismatches of 17.4, 6.4 and 5.2 mm. The cause was
+/// the coarse template: interior nodes sampled one row inside the girth
+/// lines (14 within 10 mm of the hip line, none of them ring nodes) made
+/// slivers along them, which folded the refined garment (427 fine edges
+/// with a dihedral angle past 90° on the design body). Nodes now keep the
+/// sampling spacing from the outline too, and the contracted mesh is
+/// flipped towards larger angles (`geom::flip`).
+#[test]
+fn regression_the_authored_skirt_on_pop15_and_pop09_scan() {
+    use grade3d::body::derive::Landmarks;
+    use grade3d::mannequin::population::{sample_population, scan_like};
+    let model = BodyModel::embedded().unwrap();
+    let pop = sample_population(40, 13);
+    let (_, skirt) = &authored()[0];
+    let t = &skirt.template;
+    let design = obstacle(&design_body().mesh);
+    let plan = block(t, design_body(), Some(&design), &GradeOptions::default()).unwrap();
+    let mut b = bars::Bars::default();
+    b.open_templates.push(("helper-skirt".into(), SKIRT_STRAIN_CEILING));
+    for (i, scan) in [(15, false), (9, true)] {
+        let p = &pop[i];
+        let mesh = model.build(&p.params).unwrap();
+        let lm = hm08_landmarks(model, &mesh, &Default::default()).unwrap();
+        let (name, mesh, lm) = if scan {
+            let s = scan_like(&mesh, 60_000, 1e-3, 13 ^ i as u64).unwrap();
+            (format!("{}-scan", p.name), s, Landmarks { points: lm.points.clone(), curves: Default::default() })
+        } else {
+            (p.name.clone(), mesh, lm)
+        };
+        let body = derive_features(mesh, &lm, &DeriveOptions::default()).unwrap();
+        let o = obstacle(&body.mesh);
+        let g =
+            grade_with_darts(t, &body, Some(&o), &name, &GradeOptions::default(), DartSource::Block(&plan)).unwrap();
+        for r in &g.pattern.reports {
+            assert_eq!(r.distortion.flipped, 0, "{name} {}", r.name);
+        }
+        for s in &g.pattern.seams {
+            assert!(s.mismatch_mm <= 1.0, "{name} {}: {} mm", s.name, s.mismatch_mm);
+        }
+        b.check(t, &body, &o, &g, &name, false);
+    }
+    b.report();
+    assert!(b.failures.is_empty(), "{}", b.failures.join("\n"));
+    // no node but the ring's within 10 mm of the hip line on the design body
+    let hip = grade3d::template::girth::girth_plane(design_body(), grade3d::body::vocab::CurveId::Hip).unwrap();
+    let near: Vec<usize> = t
+        .nodes
+        .iter()
+        .enumerate()
+        .filter(|(_, n)| !n.point.to_string().starts_with("hip_"))
+        .filter(|(_, n)| hip.signed_distance(glam::DVec3::from_array(n.reference)).abs() < 0.01)
+        .map(|(i, _)| i)
+        .collect();
+    assert!(near.is_empty(), "nodes {near:?} lie within 10 mm of the hip line");
 }

@@ -48,11 +48,14 @@ use grade3d::mannequin::model::BodyModel;
 use grade3d::mannequin::population::{sample_population, scan_like};
 use grade3d::pattern::garment::{DartPlan, DartSource};
 use grade3d::pipeline::{block, grade_with_darts, GradeOptions};
+use grade3d::template::from_garment::author_from_garment;
 use grade3d::template::library::{builtin, reference_body};
 
 #[path = "common/bars.rs"]
 mod bars;
 use bars::Bars;
+#[path = "common/authored.rs"]
+mod authored;
 
 /// The population's seed (any fixed value; this one is the issue's number).
 const SEED: u64 = 13;
@@ -82,21 +85,30 @@ fn bodies(range: std::ops::Range<usize>) -> Vec<(String, TriMesh, Landmarks)> {
 
 fn run(range: std::ops::Range<usize>) {
     let renderer = Renderer::new(RendererChoice::Auto).expect("a depth-map renderer (the one the service picks)");
-    let library = builtin().unwrap();
+    let mut library = builtin().unwrap();
     // each template's block, as the service makes it (`grade3d::service::blocks`): graded on the
-    // reference body, its darts decided there; every body's darts start from it, as a scan's do
+    // body it is authored on, its darts decided there; every body's darts start from it, as a scan's do
     let reference = reference_body().unwrap();
-    let reference_obstacle = Obstacle {
-        maps: renderer.depth_maps(&reference.mesh, &RenderOptions::default()).unwrap(),
-        tree: WindingTree::new(&reference.mesh, &WindingOptions::default()),
+    let obstacle_of = |body: &grade3d::body::feature::FeatureBody| Obstacle {
+        maps: renderer.depth_maps(&body.mesh, &RenderOptions::default()).unwrap(),
+        tree: WindingTree::new(&body.mesh, &WindingOptions::default()),
     };
-    let blocks: Vec<DartPlan> = library
+    let reference_obstacle = obstacle_of(&reference);
+    let mut blocks: Vec<DartPlan> = library
         .iter()
         .map(|t| block(t, &reference, Some(&reference_obstacle), &GradeOptions::default()).unwrap())
         .collect();
+    // issue #18: the skirt authored from MakeHuman's helper on its design body
+    let design = authored::design_body();
+    let skirt = author_from_garment("helper-skirt", &[authored::garment("helper-skirt")], design, &Default::default())
+        .unwrap()
+        .template;
+    blocks.push(block(&skirt, design, Some(&obstacle_of(design)), &GradeOptions::default()).unwrap());
+    library.push(skirt);
     // grades whose found darts are their block's (the block held, or there was none to carry)
     let mut block_held = 0usize;
     let mut bars = Bars::default();
+    bars.open_templates.push(("helper-skirt".into(), authored::SKIRT_STRAIN_CEILING));
     let mut failures: Vec<String> = Vec::new();
     let mut contacts: Vec<String> = Vec::new();
     for (name, mesh, lm) in bodies(range) {
@@ -116,8 +128,7 @@ fn run(range: std::ops::Range<usize>) {
                 failures.push(format!("{name}: thigh contact without its warning"));
             }
         }
-        let maps = renderer.depth_maps(&body.mesh, &RenderOptions::default()).unwrap();
-        let obstacle = Obstacle { maps, tree: WindingTree::new(&body.mesh, &WindingOptions::default()) };
+        let obstacle = obstacle_of(&body);
         for (t, block) in library.iter().zip(&blocks) {
             let darts = DartSource::Block(block);
             let g = match grade_with_darts(t, &body, Some(&obstacle), &name, &GradeOptions::default(), darts) {

@@ -3,6 +3,7 @@
 
 pub mod coons;
 pub mod cut;
+pub mod flip;
 pub mod intersect;
 pub mod mesh;
 pub mod plane;

@@ -37,7 +37,11 @@
 //! curve ([`GIRTH_CURVES`]) and each node level with its point (its Eq. (2)
 //! offset's height within [`RING_PLANE_TOLERANCE_M`]: a hem node tied to a
 //! hip point 35 cm above is not on the hip) —, as fine chains, named after
-//! the girth (`hip_line`, `thigh_line`, `bust_line`); (b) every dart as a
+//! the girth (`hip_line`, `thigh_line`, `bust_line`); a line whose ring is
+//! open at a node with one girth edge (a trouser thigh's ends) runs on
+//! along that node's edge to a crotch node on the outline — only there (an
+//! authored skirt's closed hip ring met hem nodes tied to the crotch, and
+//! its line branched); (b) every dart as a
 //! pattern maker draws it, two straight legs from the mouth to the apex
 //! (mouth → apex → mouth): the flattened slit's own legs bend and, where the
 //! flattening squeezes a narrow dart, cross.
@@ -45,7 +49,7 @@
 //! **Failure modes** — [`PieceError`]: the grain line's nodes not in the
 //! panel, or `uv` not one point per panel vertex.
 
-use std::collections::{BTreeMap, HashSet};
+use std::collections::{BTreeMap, HashMap, HashSet};
 
 use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
@@ -316,10 +320,21 @@ fn internal_lines(
         })
         .collect();
     let ends_inside = |l: PanelVertex| !on_outline.contains(&l);
+    // only an open ring closes through the crotch: a node with one girth edge
+    // (the thigh's ends), not a closed ring's node with a free edge to a
+    // node that happens to be tied to the crotch (an authored skirt's hem)
+    let mut girth_degree: HashMap<u32, usize> = HashMap::new();
+    for e in t.edges.iter().filter(|e| girth(e).is_some()) {
+        *girth_degree.entry(e.start).or_default() += 1;
+        *girth_degree.entry(e.end).or_default() += 1;
+    }
     let mut closures = Vec::new();
     for (name, chain) in &lines {
         for &end in [chain[0], chain[chain.len() - 1]].iter().filter(|&&l| ends_inside(l)) {
             let Some(node) = vertex_node(panel.global[end], t.nodes.len()) else { continue };
+            if girth_degree.get(&node).copied().unwrap_or(0) != 1 {
+                continue;
+            }
             for e in t.edges.iter().filter(|e| !e.profile.is_empty()) {
                 let other = if e.start == node {
                     e.end

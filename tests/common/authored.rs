@@ -1,0 +1,41 @@
+//! The authored templates' inputs shared by `tests/from_garment.rs` and
+//! `tests/population.rs` (issue #18: templates authored from MakeHuman's
+//! helper garments, `fixtures/garments/`, on their design body).
+
+use std::path::Path;
+use std::sync::OnceLock;
+
+use grade3d::body::derive::{derive_features, DeriveOptions};
+use grade3d::body::feature::FeatureBody;
+use grade3d::io::gltf::read_mesh;
+use grade3d::mannequin::landmarks::hm08_landmarks;
+use grade3d::mannequin::model::BodyModel;
+use grade3d::template::garment_panels::PanelMesh;
+
+/// The authored skirt's strain ceiling (p95 edge strain; `tests/from_garment.rs`'s
+/// module docs): measured 8.99 % at worst over the 20 fixture bodies
+/// (ASTM size 0's front) and 9.30 % over the issue #7 population (see
+/// `tests/population.rs`); a guard against regressions, not the bar.
+pub const SKIRT_STRAIN_CEILING: f64 = 0.10;
+
+/// MakeHuman's base mesh with its features: the helpers' design body.
+pub fn design_body() -> &'static FeatureBody {
+    static B: OnceLock<FeatureBody> = OnceLock::new();
+    B.get_or_init(|| {
+        let model = BodyModel::embedded().unwrap();
+        let base = model.base_mesh().unwrap();
+        let lm = hm08_landmarks(model, &base, &Default::default()).unwrap();
+        derive_features(base, &lm, &DeriveOptions::default()).unwrap()
+    })
+}
+
+/// A fixture garment as one piece (MakeHuman's helpers are single meshes).
+pub fn garment(name: &str) -> PanelMesh {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("fixtures/garments/{name}.glb"));
+    let m = read_mesh(&std::fs::read(path).unwrap(), &Default::default()).unwrap().welded(1e-9).unwrap();
+    PanelMesh {
+        name: name.trim_start_matches("helper-").to_owned(),
+        positions: m.positions().to_vec(),
+        triangles: m.triangles().iter().map(|t| t.map(|v| v.0)).collect(),
+    }
+}
