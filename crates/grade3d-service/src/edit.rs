@@ -178,12 +178,23 @@ mod tests {
         Request::get(uri).body(Body::empty()).unwrap()
     }
 
-    fn put(name: &str, doc: &str) -> Request<Body> {
-        Request::put(format!("/v1/templates/{name}"))
+    /// A write of a template document with the key: `PUT` to `name`, or `POST` a new one.
+    fn write(method: &str, uri: &str, doc: &str) -> Request<Body> {
+        Request::builder()
+            .method(method)
+            .uri(uri)
             .header(header::AUTHORIZATION, "Bearer k")
             .header(header::CONTENT_TYPE, "application/json")
             .body(Body::from(doc.to_owned()))
             .unwrap()
+    }
+
+    fn put(name: &str, doc: &str) -> Request<Body> {
+        write("PUT", &format!("/v1/templates/{name}"), doc)
+    }
+
+    fn create(t: &Template) -> Request<Body> {
+        write("POST", "/v1/templates", &t.to_json())
     }
 
     /// A node move: `(dx, dy)` pixels at 1 mm per pixel in `view`.
@@ -294,12 +305,7 @@ mod tests {
         let mut skirt = s.0.store.get("straight-skirt", None).unwrap().1;
         skirt.name = "base-skirt".into();
         skirt.design_body = Some(DesignBody::MakehumanBase);
-        let create = Request::post("/v1/templates")
-            .header(header::AUTHORIZATION, "Bearer k")
-            .header(header::CONTENT_TYPE, "application/json")
-            .body(Body::from(skirt.to_json()))
-            .unwrap();
-        assert_eq!(call(&s, create).await.0, StatusCode::CREATED);
+        assert_eq!(call(&s, create(&skirt)).await.0, StatusCode::CREATED);
         let (status, _, body) = call(&s, post_edit("base-skirt", &move_node("right", 17, 20.0, 0.0), true)).await;
         assert_eq!(status, StatusCode::CREATED, "{}", String::from_utf8_lossy(&body));
         let answer: TemplateEdited = serde_json::from_slice(&body).unwrap();
@@ -348,12 +354,7 @@ mod tests {
         let (mut off, _) = (s.0.store.get("trousers", None).unwrap().1, ());
         off.name = "lopsided".into();
         off.nodes[36].alpha += 0.03;
-        let create = Request::post("/v1/templates")
-            .header(header::AUTHORIZATION, "Bearer k")
-            .header(header::CONTENT_TYPE, "application/json")
-            .body(Body::from(off.to_json()))
-            .unwrap();
-        assert_eq!(call(&s, create).await.0, StatusCode::CREATED);
+        assert_eq!(call(&s, create(&off)).await.0, StatusCode::CREATED);
         // C12's ease: the left waist node lifted off the waist, kept …
         assert_eq!(
             call(&s, post_edit("straight-skirt", &move_node("front", 2, 0.0, -40.0), true)).await.0,

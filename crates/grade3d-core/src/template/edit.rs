@@ -635,14 +635,19 @@ fn profile_points(m: &CoarseMesh, k: u32) -> &[DVec3] {
     m.profiles.get(k as usize).and_then(Option::as_ref).map(Profile::points).unwrap_or_default()
 }
 
+/// What the constraint checks read: the template before the edit, its
+/// design body, the decoded garment before and after, and the edit's targets.
+struct Checks<'a> {
+    t: &'a Template,
+    body: &'a FeatureBody,
+    before: &'a CoarseMesh,
+    after: &'a CoarseMesh,
+    tg: &'a Targets,
+}
+
 /// C12, outside the body: the moved nodes and the touched profiles.
-fn check_outside(
-    t: &Template,
-    body: &FeatureBody,
-    before: &CoarseMesh,
-    after: &CoarseMesh,
-    tg: &Targets,
-) -> Result<(), EditError> {
+fn check_outside(c: &Checks<'_>) -> Result<(), EditError> {
+    let Checks { t, body, before, after, tg } = *c;
     let tree = WindingTree::new(&body.mesh, &WindingOptions::default());
     for &v in tg.nodes.keys() {
         let p = after.positions[v as usize];
@@ -718,7 +723,8 @@ fn outline_crosses(pts: &[DVec3]) -> bool {
 }
 
 /// C13: the touched profiles and the outlines of the panels the edit touches.
-fn check_crossings(t: &Template, before: &CoarseMesh, after: &CoarseMesh, tg: &Targets) -> Result<(), EditError> {
+fn check_crossings(c: &Checks<'_>) -> Result<(), EditError> {
+    let Checks { t, before, after, tg, .. } = *c;
     let touched = touched_edges(t, tg);
     for &k in &touched {
         if profile_crosses(profile_points(after, k)) && !profile_crosses(profile_points(before, k)) {
@@ -787,13 +793,9 @@ fn order_breaks(rings: &[(CurveId, Vec<u32>)], positions: &[DVec3]) -> Vec<(Curv
     out
 }
 
-fn check_order(
-    t: &Template,
-    body: &FeatureBody,
-    before: &CoarseMesh,
-    after: &CoarseMesh,
-    tg: &Targets,
-) -> Result<(), EditError> {
+/// C8 (module docs).
+fn check_order(c: &Checks<'_>) -> Result<(), EditError> {
+    let Checks { t, body, before, after, tg } = *c;
     let rings: Vec<(CurveId, Vec<u32>)> = GIRTH_CURVES
         .iter()
         .map(|&c| (c, ring_nodes(t, body, &before.positions, c, &before.hung)))
@@ -863,9 +865,10 @@ pub fn apply_edit(
     let new = apply(t, body, &before.m, &mut tg)?;
     let after = state(&new, body, opts)?;
     check_sticks(t, &after.m, &tg, opts.stick_tolerance_mm * 1e-3)?;
-    check_outside(t, body, &before.m, &after.m, &tg)?;
-    check_crossings(t, &before.m, &after.m, &tg)?;
-    check_order(t, body, &before.m, &after.m, &tg)?;
+    let checks = Checks { t, body, before: &before.m, after: &after.m, tg: &tg };
+    check_outside(&checks)?;
+    check_crossings(&checks)?;
+    check_order(&checks)?;
     check_ease(&new, &before.ease, &after.ease)?;
     let coarse = TriMesh::new(after.m.positions.clone(), after.m.triangles.iter().map(|f| f.map(VertexId)).collect())?;
     Ok(Edited {
@@ -1026,14 +1029,15 @@ mod tests {
         after.profiles[k as usize] = Some(Profile::new(pts.clone()).unwrap());
         let mut tg = Targets::default();
         tg.edges.insert(k, pts);
-        match check_outside(&f.skirt, &f.body, &before, &after, &tg) {
+        let checks = |after| Checks { t: &f.skirt, body: &f.body, before: &before, after, tg: &tg };
+        match check_outside(&checks(&after)) {
             Err(EditError::ProfileInside { edge, point, depth_mm }) => {
                 assert_eq!((edge, point), (k, 3));
                 assert!(depth_mm > 50.0, "{depth_mm}");
             }
             other => panic!("{other:?}"),
         }
-        assert_eq!(check_outside(&f.skirt, &f.body, &before, &before, &tg), Ok(()));
+        assert_eq!(check_outside(&checks(&before)), Ok(()));
     }
 
     #[test]
