@@ -1090,6 +1090,30 @@ mod tests {
     }
 
     #[test]
+    fn only_nodes_facing_the_viewer_are_selected() {
+        let f = fixture();
+        let m = decoded(&f.skirt);
+        let (_, towards) = CanonicalView::Front.axes();
+        let facing: Vec<f64> = node_normals(&m).iter().map(|n| n.dot(towards)).collect();
+        // the front hem and the side hem face the front view; the back-left hem node does not
+        assert!(facing[17] > 0.5 && facing[18] > -0.2 && facing[19] < -0.2, "{:?}", &facing[16..24]);
+        // a straight stroke along the front hem from node 17 to node 18 passes over node 19's pixel
+        // (behind, at the same height): only edge 17–18 is selected …
+        let (k, chord) = hem_stroke(|_| DVec2::ZERO);
+        let v = view(CanonicalView::Front);
+        let q19 = v.to_px(m.positions[19]);
+        assert!(chord.windows(2).any(|w| (q19 - w[0]).perp_dot(w[1] - w[0]).abs() / w[0].distance(w[1]) < 1.0));
+        let e = stroke_edit(&f.skirt, CanonicalView::Front, chord.clone()).unwrap();
+        assert_eq!(e.edited_edges, vec![k]);
+        // … where every node counted as seen, the back hem edge 18–19 would be too (and the three
+        // hem nodes, level, give a plane seen edge-on)
+        let all = EditOptions { facing_min: -1.0, ..EditOptions::default() };
+        let stroke = chord.iter().map(|q| [q.x, q.y]).collect();
+        let edit = SketchEdit { view: v, edit: EditKind::Profile { stroke }, options: Default::default() };
+        assert_eq!(apply_edit(&f.skirt, &f.body, &edit, &all), Err(EditError::Sketch(SketchError::EdgeOn)));
+    }
+
+    #[test]
     fn symmetric_a_trouser_hem_node_move_lands_on_both_sides() {
         let f = fixture();
         let before = decoded(&f.trousers);
