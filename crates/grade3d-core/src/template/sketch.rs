@@ -1,7 +1,9 @@
-//! Sketch edits of a template (seed 000 §4; issue #18 item 3, the geometry
-//! without the service route): a stroke drawn in one of the canonical
-//! orthographic views moves a node (§4.2, Eq. (4)) or re-profiles the
-//! edges it runs along (§4.3, Eqs. (6)–(7) and the K(v) rules).
+//! Sketch edits of a template (seed 000 §4; issue #18 item 3, the geometry:
+//! [`super::edit`] applies one to a template under seed 002's constraints,
+//! the service's `POST /v1/templates/{name}/edits` stores it): a stroke
+//! drawn in one of the canonical orthographic views moves a node (§4.2,
+//! Eq. (4)) or re-profiles the edges it runs along (§4.3, Eqs. (6)–(7) and
+//! the K(v) rules).
 //!
 //! # Views
 //!
