@@ -391,6 +391,7 @@ mod tests {
             ),
             ("straight-skirt", move_node("right", 1, 5.0, 0.0), 422, "edit-overridden", &["node 1", "`waist`"]),
             ("straight-skirt", move_node("front", 99, 5.0, 0.0), 422, "edit-no-such-node", &["node 99"]),
+            ("straight-skirt", move_node("front", 17, 1e9, 0.0), 422, "edit-out-of-reach", &["node 17"]),
             ("straight-skirt", move_node("front", 17, 0.0, 0.0), 400, "sketch-stroke", &["no length"]),
             ("nope", move_node("front", 1, 5.0, 0.0), 404, "not-found", &["nope"]),
         ];

@@ -112,6 +112,7 @@ impl From<EditError> for Problem {
             EditError::Profile { .. } => c("edit-profile", "edit.stroke"),
             EditError::Template(_) => c("edit-invalid-template", "edit"),
             EditError::Overridden { .. } => c("edit-overridden", "edit"),
+            EditError::OutOfReach { .. } => c("edit-out-of-reach", "edit.stroke"),
             EditError::NoCounterpart { .. } => c("constraint-symmetric", "edit"),
             EditError::NodeInside { .. } => c("constraint-c12-inside-body", "edit.node"),
             EditError::ProfileInside { .. } => c("constraint-c12-inside-body", "edit.stroke"),

@@ -28,7 +28,9 @@
 //!    [`EditOptions::mirror_tolerance_mm`]; a node that is its own
 //!    counterpart (on the centre line) is kept on the plane. The mirrored
 //!    profile is warped by Eq. (6) onto the counterpart edge's nodes.
-//!    Resolved, and listed ([`Resolution`]).
+//!    Resolved, and listed ([`Resolution`]). A moved node or new profile
+//!    point beyond [`EditOptions::reach_m`] of the body's bounding box is
+//!    refused ([`EditError::OutOfReach`]).
 //! 4. **Re-encoding** by Eq. (1): each moved node keeps its feature point
 //!    `j`; `(α, β, γ)` solve `p − p(q_j) = α n + β t(f1) + γ t(f2)` in that
 //!    point's frame; `offset` (Eq. (2)) and `reference` are its new offset
@@ -157,11 +159,14 @@ pub struct EditOptions {
     /// Subdivision levels of the refined preview; `None`: the template's
     /// default (3 for the built-ins).
     pub levels: Option<usize>,
+    /// A moved node or new profile point must lie within this distance of
+    /// the design body's bounding box, m. Default 1.
+    pub reach_m: f64,
 }
 
 impl Default for EditOptions {
     fn default() -> Self {
-        Self { facing_min: -0.2, mirror_tolerance_mm: 10.0, stick_tolerance_mm: 0.01, levels: None }
+        Self { facing_min: -0.2, mirror_tolerance_mm: 10.0, stick_tolerance_mm: 0.01, levels: None, reach_m: 1.0 }
     }
 }
 
@@ -236,6 +241,17 @@ pub enum EditError {
         by: String,
         /// How far decoding put it from the edit's position, mm.
         moved_mm: f64,
+    },
+    /// A moved node or profile point far outside the design body's reach
+    /// (a stroke at a scale that sends it metres away).
+    #[error("{element} would go {distance_m:.2} m beyond the design body's bounding box (at most {reach_m} m)")]
+    OutOfReach {
+        /// `node N` or `edge N`.
+        element: String,
+        /// How far beyond the box, m.
+        distance_m: f64,
+        /// The limit, m.
+        reach_m: f64,
     },
     /// Symmetric: a node or edge of a mirror-pair panel without a counterpart.
     #[error("symmetric: {element} lies on mirror-pair panel `{panel}` but nothing lies within {tolerance_mm} mm of its mirror image")]
@@ -522,6 +538,28 @@ fn mirrored(t: &Template, m: &CoarseMesh, mirror: &Mirror, mut asked: Targets) -
         asked.resolved.push(Resolution::MirroredEdge { edge: k, counterpart: c });
     }
     Ok(Targets { nodes, edges, resolved: asked.resolved })
+}
+
+/// Every target within [`EditOptions::reach_m`] of the body's bounding box.
+fn check_reach(body: &FeatureBody, tg: &Targets, reach_m: f64) -> Result<(), EditError> {
+    let b = body.mesh.aabb();
+    let beyond = |p: &DVec3| (b.min - *p).max(*p - b.max).max(DVec3::ZERO).length();
+    let far = |element: String, pts: &mut dyn Iterator<Item = &DVec3>| {
+        let d = pts.map(beyond).fold(0.0, f64::max);
+        // a non-finite point is beyond every reach
+        if d > reach_m || !d.is_finite() {
+            Err(EditError::OutOfReach { element, distance_m: d, reach_m })
+        } else {
+            Ok(())
+        }
+    };
+    for (v, p) in &tg.nodes {
+        far(format!("node {v}"), &mut std::iter::once(p))?;
+    }
+    for (k, pts) in &tg.edges {
+        far(format!("edge {k}"), &mut pts.iter())?;
+    }
+    Ok(())
 }
 
 /// Removes node `v`'s placement rules from `t`, naming those removed.
@@ -862,6 +900,7 @@ pub fn apply_edit(
         Some(mirror) => mirrored(t, &before.m, &mirror, asked)?,
         None => asked,
     };
+    check_reach(body, &tg, opts.reach_m)?;
     let new = apply(t, body, &before.m, &mut tg)?;
     let after = state(&new, body, opts)?;
     check_sticks(t, &after.m, &tg, opts.stick_tolerance_mm * 1e-3)?;
@@ -982,6 +1021,14 @@ mod tests {
             move_by(&f.skirt, 99, CanonicalView::Front, 5.0, 0.0),
             Err(EditError::NoNode { node: 99, nodes: 24 })
         );
+        // a stroke at a scale that sends the node metres away
+        match move_by(&f.skirt, 17, CanonicalView::Front, 5000.0, 0.0) {
+            Err(EditError::OutOfReach { element, distance_m, reach_m }) => {
+                assert_eq!((element.as_str(), reach_m), ("node 17", 1.0));
+                assert!(distance_m > 4.0 && distance_m < 5.0, "{distance_m}");
+            }
+            other => panic!("{:?}", other.map(|e| e.resolved)),
+        }
     }
 
     #[test]
