@@ -543,11 +543,17 @@ fn mirrored(t: &Template, m: &CoarseMesh, mirror: &Mirror, mut asked: Targets) -
 /// Every target within [`EditOptions::reach_m`] of the body's bounding box.
 fn check_reach(body: &FeatureBody, tg: &Targets, reach_m: f64) -> Result<(), EditError> {
     let b = body.mesh.aabb();
-    let beyond = |p: &DVec3| (b.min - *p).max(*p - b.max).max(DVec3::ZERO).length();
+    let beyond = |p: &DVec3| {
+        if p.is_finite() {
+            (b.min - *p).max(*p - b.max).max(DVec3::ZERO).length()
+        } else {
+            f64::INFINITY
+        }
+    };
     let far = |element: String, pts: &mut dyn Iterator<Item = &DVec3>| {
         let d = pts.map(beyond).fold(0.0, f64::max);
         // a non-finite point is beyond every reach
-        if d > reach_m || !d.is_finite() {
+        if d > reach_m {
             Err(EditError::OutOfReach { element, distance_m: d, reach_m })
         } else {
             Ok(())
@@ -1029,6 +1035,11 @@ mod tests {
             }
             other => panic!("{:?}", other.map(|e| e.resolved)),
         }
+        let mut tg = Targets::default();
+        tg.edges.insert(3, vec![DVec3::ZERO, DVec3::NAN]);
+        assert!(
+            matches!(check_reach(&f.body, &tg, 1.0), Err(EditError::OutOfReach { element, .. }) if element == "edge 3")
+        );
     }
 
     #[test]
