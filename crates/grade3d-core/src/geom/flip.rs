@@ -152,54 +152,51 @@ pub fn lawson_flips(positions: &[DVec3], triangles: &mut [[u32; 3]], region: &[u
 mod tests {
     use super::*;
 
-    /// A long thin quad split along its long diagonal flips to the short one.
+    /// A kite 2 long and 0.2 wide in the plane z = 0, its long diagonal 0–1,
+    /// its short one 2–3.
+    fn kite() -> [DVec3; 4] {
+        [DVec3::new(-1.0, 0.0, 0.0), DVec3::new(1.0, 0.0, 0.0), DVec3::new(0.0, 0.1, 0.0), DVec3::new(0.0, -0.1, 0.0)]
+    }
+
+    /// How many triangles use each edge.
+    fn edge_uses(t: &[[u32; 3]]) -> BTreeMap<(u32, u32), usize> {
+        let mut uses = BTreeMap::new();
+        for f in t {
+            for k in 0..3 {
+                let (a, b) = (f[k], f[(k + 1) % 3]);
+                *uses.entry((a.min(b), a.max(b))).or_default() += 1;
+            }
+        }
+        uses
+    }
+
+    /// A kite split along its long diagonal (two slivers) flips to the short one.
     #[test]
     fn a_sliver_pair_flips_to_the_short_diagonal() {
-        let p = [DVec3::ZERO, DVec3::new(1.0, 0.0, 0.0), DVec3::new(1.0, 0.2, 0.0), DVec3::new(0.0, 0.2, 0.0)];
-        // diagonal 0–2: both triangles have a small angle at 0 / 2 (11.3°), fine; make a kite instead
-        let kite = [
-            DVec3::new(-1.0, 0.0, 0.0),
-            DVec3::new(1.0, 0.0, 0.0),
-            DVec3::new(0.0, 0.1, 0.0),
-            DVec3::new(0.0, -0.1, 0.0),
-        ];
-        // split along 0–1 (the long axis): slivers
+        let kite = kite();
         let mut t = vec![[0, 1, 2], [1, 0, 3]];
-        let flips = lawson_flips(&kite, &mut t, &[0, 0], &FlipOptions::default());
-        assert_eq!(flips, 1);
-        let mut edges: Vec<[u32; 2]> =
-            t.iter().flat_map(|t| (0..3).map(move |k| [t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3])])).collect();
-        edges.sort_unstable();
-        edges.dedup();
-        assert!(edges.contains(&[2, 3]) && !edges.contains(&[0, 1]), "{edges:?}");
+        assert_eq!(lawson_flips(&kite, &mut t, &[0, 0], &FlipOptions::default()), 1);
+        let uses = edge_uses(&t);
+        assert!(uses.contains_key(&(2, 3)) && !uses.contains_key(&(0, 1)), "{uses:?}");
         // orientation kept: both still face +z, as the input did
         for f in &t {
             let n = normal(kite[f[0] as usize], kite[f[1] as usize], kite[f[2] as usize]).unwrap();
             assert!(n.z > 0.99, "{t:?}");
         }
         // a rectangle's two diagonals are equally good: nothing flips
+        let rect = [DVec3::ZERO, DVec3::new(1.0, 0.0, 0.0), DVec3::new(1.0, 0.2, 0.0), DVec3::new(0.0, 0.2, 0.0)];
         let mut r = vec![[0, 1, 2], [0, 2, 3]];
-        assert_eq!(lawson_flips(&p, &mut r, &[0, 0], &FlipOptions::default()), 0);
+        assert_eq!(lawson_flips(&rect, &mut r, &[0, 0], &FlipOptions::default()), 0);
     }
 
     /// Edges between regions, boundary edges and folded pairs stay.
     #[test]
     fn fixed_edges_stay() {
-        let kite = [
-            DVec3::new(-1.0, 0.0, 0.0),
-            DVec3::new(1.0, 0.0, 0.0),
-            DVec3::new(0.0, 0.1, 0.0),
-            DVec3::new(0.0, -0.1, 0.0),
-        ];
         let mut t = vec![[0, 1, 2], [1, 0, 3]];
-        assert_eq!(lawson_flips(&kite, &mut t, &[0, 1], &FlipOptions::default()), 0);
+        assert_eq!(lawson_flips(&kite(), &mut t, &[0, 1], &FlipOptions::default()), 0);
         // the same kite folded 90° about its long axis
-        let folded = [
-            DVec3::new(-1.0, 0.0, 0.0),
-            DVec3::new(1.0, 0.0, 0.0),
-            DVec3::new(0.0, 0.1, 0.0),
-            DVec3::new(0.0, 0.0, -0.1),
-        ];
+        let mut folded = kite();
+        folded[3] = DVec3::new(0.0, 0.0, -0.1);
         assert_eq!(lawson_flips(&folded, &mut t, &[0, 0], &FlipOptions::default()), 0);
         assert_eq!(t, vec![[0, 1, 2], [1, 0, 3]]);
     }
@@ -209,23 +206,11 @@ mod tests {
     /// triangles): only the first flips.
     #[test]
     fn two_flips_never_make_the_same_edge() {
-        let p = [
-            DVec3::new(-1.0, 0.0, 0.0),
-            DVec3::new(1.0, 0.0, 0.0),
-            DVec3::new(0.0, 0.1, 0.0),
-            DVec3::new(0.0, -0.1, 0.0),
-            DVec3::new(-1.0, 0.0, 0.01),
-            DVec3::new(1.0, 0.0, 0.01),
-        ];
+        let mut p = kite().to_vec();
+        p.extend([DVec3::new(-1.0, 0.0, 0.01), DVec3::new(1.0, 0.0, 0.01)]);
         let mut t = vec![[0, 1, 2], [1, 0, 3], [4, 5, 2], [5, 4, 3]];
         assert_eq!(lawson_flips(&p, &mut t, &[0; 4], &FlipOptions::default()), 1);
-        let mut uses: BTreeMap<(u32, u32), usize> = BTreeMap::new();
-        for f in &t {
-            for k in 0..3 {
-                let (a, b) = (f[k], f[(k + 1) % 3]);
-                *uses.entry((a.min(b), a.max(b))).or_default() += 1;
-            }
-        }
+        let uses = edge_uses(&t);
         assert!(uses.values().all(|&n| n <= 2), "{uses:?}");
     }
 
