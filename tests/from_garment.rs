@@ -277,3 +277,111 @@ fn regression_the_authored_skirt_on_pop15_and_pop09_scan() {
         .collect();
     assert!(near.is_empty(), "nodes {near:?} lie within 10 mm of the hip line");
 }
+
+/// The curve skirt's open ceilings (p95 edge strain, |E_s|): measured
+/// 11.63 % (ASTM size 0's lower front) and 2.78 % (its upper front) over
+/// the five fixture bodies it is graded on; guards against regressions,
+/// not the bars (4 %, 2 %), which it does not meet off its design body.
+const CURVE_SKIRT_STRAIN_CEILING: f64 = 0.125;
+/// See [`CURVE_SKIRT_STRAIN_CEILING`].
+const CURVE_SKIRT_AREA_CEILING: f64 = 0.03;
+
+/// Issue #18 item 2: an A-line skirt drawn as curves (seed 001) on the
+/// design body — its waist, hip and hem as ellipses round the body's
+/// girths (20 mm out at the waist, 25 mm at the hip, the hem 350 mm below
+/// the hip and 60 mm out), its side seams straight — in four Coons panels
+/// (front and back, waist to hip and hip to hem), authored like a designed
+/// garment: it round-trips onto its design body within the bars, its hip
+/// line (also the seam between the bands) stays one ring, and graded on
+/// every fourth fixture body it meets the bars of issues #7/#8 but strain
+/// and area accuracy, which are held to the open ceilings above.
+#[test]
+fn a_skirt_from_curves_round_trips_and_grades() {
+    use grade3d::body::vocab::CurveId;
+    use grade3d::template::from_curves::{panels_from_curves, CurvePanel, CurvesOptions};
+    let body = design_body();
+    // an ellipse round a girth: centre, half-width and half-depth of its section plus `out`, at height `y`
+    let ellipse = |c: CurveId, out: f64, drop: f64| {
+        let pts = &body.curves[&c].polyline.points;
+        let centre = body.curves[&c].polyline.centroid();
+        let half = |f: fn(&glam::DVec3) -> f64| pts.iter().map(|p| (f(p) - f(&centre)).abs()).fold(0.0, f64::max);
+        (centre - glam::DVec3::Y * drop, half(|p| p.x) + out, half(|p| p.z) + out)
+    };
+    let rings = [ellipse(CurveId::Waist, 0.020, 0.0), ellipse(CurveId::Hip, 0.025, 0.0), ellipse(CurveId::Hip, 0.060, 0.35)];
+    // the arc of ring `r` from angle a0 to a1 (0: the body's left side, +x; π/2: the front, +z)
+    let arc = |r: usize, a0: f64, a1: f64| -> Vec<[f64; 3]> {
+        let (c, ax, az) = rings[r];
+        (0..=48)
+            .map(|k| {
+                let a = a0 + (a1 - a0) * k as f64 / 48.0;
+                [c.x + ax * a.cos(), c.y, c.z + az * a.sin()]
+            })
+            .collect()
+    };
+    let side = |lower: usize, a: f64| vec![arc(lower, a, a)[0], arc(lower + 1, a, a)[0]]
+        .into_iter()
+        .rev()
+        .collect::<Vec<_>>();
+    use std::f64::consts::PI;
+    let mut panels = Vec::new();
+    for (band, (upper, lower)) in [("upper", (0, 1)), ("lower", (1, 2))] {
+        // front: from the left side (angle 0) round the front to the right side (π); back: π → 2π
+        for (piece, a0) in [("front", 0.0), ("back", PI)] {
+            panels.push(CurvePanel {
+                name: format!("skirt-{piece}-{band}"),
+                bottom: arc(lower, a0, a0 + PI),
+                top: arc(upper, a0, a0 + PI),
+                left: side(upper, a0),
+                right: side(upper, a0 + PI),
+            });
+        }
+    }
+    let pieces = panels_from_curves(&panels, &CurvesOptions::default()).unwrap();
+    let a = author_from_garment("curve-skirt", &pieces, body, &GarmentOptions { cut: TubeCut::None, ..Default::default() })
+        .unwrap_or_else(|e| panic!("{e}"));
+    eprintln!(
+        "curve skirt: {} nodes, {} faces, pieces {:?}, ease {:?}, unmapped {:?}",
+        a.template.nodes.len(),
+        a.template.faces.len(),
+        a.pieces,
+        a.girths,
+        a.unmapped
+    );
+    assert!(a.girths.contains_key("hip"), "{:?}", a.girths);
+    // round trip
+    let design = obstacle(&body.mesh);
+    let g = grade(&a.template, body, Some(&design), "design", &GradeOptions::default()).unwrap();
+    let graded = g.cut_mesh().unwrap();
+    let (gi, si) = (SphereIndex::new(&graded), SphereIndex::new(&a.surface));
+    let to_design = mean_p95(graded.positions().iter().map(|&q| si.closest_point(&a.surface, q).distance).collect());
+    let to_graded = mean_p95(a.surface.positions().iter().map(|&q| gi.closest_point(&graded, q).distance).collect());
+    eprintln!(
+        "curve skirt: graded → designed mean {:.2} mm, p95 {:.2} mm; designed → graded mean {:.2} mm, p95 {:.2} mm",
+        to_design.0, to_design.1, to_graded.0, to_graded.1
+    );
+    for (mean, p95) in [to_design, to_graded] {
+        assert!(mean <= ROUND_TRIP_MEAN_MM && p95 <= ROUND_TRIP_P95_MM, "{mean} {p95}");
+    }
+    // graded on fixture bodies, every bar
+    let plan = block(&a.template, body, Some(&design), &GradeOptions::default()).unwrap();
+    let mut b = bars::Bars::default();
+    b.open_templates.push(("curve-skirt".into(), CURVE_SKIRT_STRAIN_CEILING));
+    for (name, mesh, lm) in fixture_bodies().into_iter().step_by(4) {
+        let fb = derive_features(mesh, &lm, &DeriveOptions::default()).unwrap();
+        let o = obstacle(&fb.mesh);
+        let g = grade_with_darts(&a.template, &fb, Some(&o), &name, &GradeOptions::default(), DartSource::Block(&plan))
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        b.check(&a.template, &fb, &o, &g, &name, false);
+    }
+    b.report();
+    // area accuracy is open on this garment (issue #18): printed, held to the
+    // ceiling measured; strain is held to its ceiling by `open_templates`;
+    // every other bar holds
+    let (open, failures): (Vec<&String>, Vec<&String>) = b.failures.iter().partition(|f| f.contains(": E_s "));
+    for f in &open {
+        eprintln!("open: {f}");
+        let e: f64 = f.rsplit(' ').next().and_then(|v| v.parse().ok()).unwrap();
+        assert!(e.abs() <= CURVE_SKIRT_AREA_CEILING, "{f}");
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}

@@ -1080,13 +1080,15 @@ fn outline_kinds(soup: &Soup, ring_edges: &BTreeSet<(u32, u32)>) -> BTreeMap<(u3
     }
     let mut out = BTreeMap::new();
     for (e, fs) in faces {
+        // a girth line first, also where it is a seam (pieces drawn to meet
+        // at the hip): no outline node may break its ring
         let kind = match fs[..] {
+            _ if ring_edges.contains(&e) => Some(Along::Ring),
             [f] => Some(Along::Free(soup.panel[f])),
             [f, g] if soup.panel[f] != soup.panel[g] => {
                 let (p, q) = (soup.panel[f], soup.panel[g]);
                 Some(Along::Seam(p.min(q), p.max(q)))
             }
-            _ if ring_edges.contains(&e) => Some(Along::Ring),
             _ => None,
         };
         if let Some(k) = kind {

@@ -7,6 +7,7 @@
 pub mod codec;
 pub mod edit;
 pub mod format;
+pub mod from_curves;
 pub mod from_garment;
 pub mod garment_panels;
 pub mod girth;
