@@ -307,7 +307,8 @@ fn a_skirt_from_curves_round_trips_and_grades() {
         let half = |f: fn(&glam::DVec3) -> f64| pts.iter().map(|p| (f(p) - f(&centre)).abs()).fold(0.0, f64::max);
         (centre - glam::DVec3::Y * drop, half(|p| p.x) + out, half(|p| p.z) + out)
     };
-    let rings = [ellipse(CurveId::Waist, 0.020, 0.0), ellipse(CurveId::Hip, 0.025, 0.0), ellipse(CurveId::Hip, 0.060, 0.35)];
+    let rings =
+        [ellipse(CurveId::Waist, 0.020, 0.0), ellipse(CurveId::Hip, 0.025, 0.0), ellipse(CurveId::Hip, 0.060, 0.35)];
     // the arc of ring `r` from angle a0 to a1 (0: the body's left side, +x; π/2: the front, +z)
     let arc = |r: usize, a0: f64, a1: f64| -> Vec<[f64; 3]> {
         let (c, ax, az) = rings[r];
@@ -318,10 +319,8 @@ fn a_skirt_from_curves_round_trips_and_grades() {
             })
             .collect()
     };
-    let side = |lower: usize, a: f64| vec![arc(lower, a, a)[0], arc(lower + 1, a, a)[0]]
-        .into_iter()
-        .rev()
-        .collect::<Vec<_>>();
+    let side =
+        |lower: usize, a: f64| vec![arc(lower, a, a)[0], arc(lower + 1, a, a)[0]].into_iter().rev().collect::<Vec<_>>();
     use std::f64::consts::PI;
     let mut panels = Vec::new();
     for (band, (upper, lower)) in [("upper", (0, 1)), ("lower", (1, 2))] {
@@ -337,8 +336,9 @@ fn a_skirt_from_curves_round_trips_and_grades() {
         }
     }
     let pieces = panels_from_curves(&panels, &CurvesOptions::default()).unwrap();
-    let a = author_from_garment("curve-skirt", &pieces, body, &GarmentOptions { cut: TubeCut::None, ..Default::default() })
-        .unwrap_or_else(|e| panic!("{e}"));
+    let a =
+        author_from_garment("curve-skirt", &pieces, body, &GarmentOptions { cut: TubeCut::None, ..Default::default() })
+            .unwrap_or_else(|e| panic!("{e}"));
     eprintln!(
         "curve skirt: {} nodes, {} faces, pieces {:?}, ease {:?}, unmapped {:?}",
         a.template.nodes.len(),

@@ -30,6 +30,7 @@ use crate::refine::subdivide::RefineError;
 use crate::template::codec::CodecError;
 use crate::template::edit::EditError;
 use crate::template::format::TemplateError;
+use crate::template::from_curves::FromCurvesError;
 use crate::template::from_garment::FromGarmentError;
 use crate::template::profile::ProfileError;
 use crate::template::sketch::SketchError;
@@ -82,6 +83,14 @@ impl From<AuthorRequestError> for Problem {
                 FromGarmentError::Surface(_) => Problem::unprocessable("garment-surface", detail).field("garment"),
                 FromGarmentError::Simplify(_) => Problem::unprocessable("garment-contraction", detail).field("garment"),
                 FromGarmentError::Codec(_) => Problem::unprocessable("authoring-failed", detail).field("garment"),
+            },
+            AuthorRequestError::Curves(c) => match c {
+                FromCurvesError::NoPanel => Problem::unprocessable("curves-no-panel", detail).field("panels"),
+                // the detail names the panel
+                FromCurvesError::Patch { .. } => Problem::unprocessable("curves-patch", detail).field("panels"),
+                FromCurvesError::Samples { .. } => {
+                    Problem::bad_request("invalid-options", detail).field("curves.samples")
+                }
             },
         }
     }

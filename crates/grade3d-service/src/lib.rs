@@ -7,7 +7,7 @@
 //! the OpenAPI document: [`api`], committed as `openapi.yaml`):
 //! - `GET /healthz`, `GET /readyz`, `GET /metrics`
 //! - `GET|POST /v1/templates`, `GET|PUT|DELETE /v1/templates/{name}`
-//! - `POST /v1/templates/from-garment`, `POST /v1/templates/{name}/edits` (sketch edits)
+//! - `POST /v1/templates/from-garment`, `POST /v1/templates/from-curves`, `POST /v1/templates/{name}/edits` (sketch edits)
 //! - `POST /v1/grade/size-chart` (JSON or CSV), `POST /v1/grade/scan` (multipart)
 //! - `GET /v1/results/{id}`, `GET /v1/results/{id}/{artefact}`
 //! - `POST /v1/jobs`, `GET /v1/jobs/{id}`, `GET /v1/jobs/{id}/artefacts/{artefact}`
@@ -337,6 +337,7 @@ pub fn routes() -> OpenApiRouter<AppState> {
         .routes(routes!(list_templates, create_template))
         .routes(routes!(get_template, replace_template, delete_template))
         .routes(routes!(create_template_from_garment))
+        .routes(routes!(create_template_from_curves))
         .routes(routes!(edit_template))
         .routes(routes!(grade_size_chart))
         .routes(routes!(grade_scan))
@@ -718,6 +719,42 @@ async fn create_template_from_garment(
         s.0.pool
             .run(limit, move || -> Result<author::Authored, Problem> {
                 let (t, report) = author::author(&input)?;
+                let entry = me.0.store.put(None, &t.to_json(), true)?;
+                Ok(author::Authored { template: entry, ..report })
+            })
+            .await??;
+    let location = format!("/v1/templates/{}", report.template.name);
+    Ok((StatusCode::CREATED, [(header::LOCATION, location)], Json(report)).into_response())
+}
+
+/// Author a template from 3D curves (issue #18 item 2, seed 001) and store it as version 1.
+#[utoipa::path(post, path = "/v1/templates/from-curves", tag = "templates", operation_id = "createTemplateFromCurves",
+    security(("apiKey" = [])),
+    request_body(content = author::CurvesUpload, content_type = "application/json",
+        description = "Panels as four 3D boundary curves each, drawn on their design body: each panel a Coons patch (seed 001's bicubically blended form), sampled, sewn to the others along shared curves, then authored as a designed garment (seed 000 §3.3)."),
+    responses(
+        (status = 201, description = "Authored and stored, durably; what could not be mapped is listed.", body = author::Authored,
+            headers(("Location" = String, description = "/v1/templates/{name}"))),
+        (status = 409, response = api::Conflict),
+        api::FlowProblems,
+    ))]
+async fn create_template_from_curves(
+    State(s): State<AppState>,
+    headers: HeaderMap,
+    body: axum::body::Body,
+) -> Result<Response, Problem> {
+    if !media_is(&headers, "application/json") {
+        return Err(unsupported_media("application/json"));
+    }
+    let bytes = body_bytes(&s, &headers, body).await?;
+    check_key(&s, &headers, true)?;
+    let input: author::CurvesUpload = parse_json_body(&bytes)?;
+    valid_name(&input.name)?;
+    let me = s.clone();
+    let report =
+        s.0.pool
+            .run(s.0.cfg.request_timeout(), move || -> Result<author::Authored, Problem> {
+                let (t, report) = author::author_curves(&input)?;
                 let entry = me.0.store.put(None, &t.to_json(), true)?;
                 Ok(author::Authored { template: entry, ..report })
             })
@@ -1560,7 +1597,7 @@ mod tests {
                 assert!(!text.contains("no such route"), "{method} {path} is documented but not routed: {text}");
             }
         }
-        assert_eq!(operations, 18, "the service's 18 operations");
+        assert_eq!(operations, 19, "the service's 19 operations");
         // the reverse: no route bypasses the documented list
         let code = include_str!("lib.rs");
         let code = &code[..code.find("#[cfg(test)]").unwrap_or(code.len())];

@@ -118,8 +118,9 @@ pub fn panels_from_curves(panels: &[CurvePanel], opts: &CurvesOptions) -> Result
     let mut pieces = Vec::with_capacity(panels.len());
     for p in panels {
         let patch = |e| FromCurvesError::Patch { panel: p.name.clone(), source: e };
-        let coons = CoonsPatch::new(&points(&p.bottom), &points(&p.top), &points(&p.left), &points(&p.right), &opts.coons)
-            .map_err(patch)?;
+        let coons =
+            CoonsPatch::new(&points(&p.bottom), &points(&p.top), &points(&p.left), &points(&p.right), &opts.coons)
+                .map_err(patch)?;
         let (positions, triangles) = coons.sample(opts.samples, opts.samples).map_err(patch)?;
         pieces.push(PanelMesh { name: p.name.clone(), positions, triangles });
     }
