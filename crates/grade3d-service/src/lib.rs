@@ -713,12 +713,20 @@ async fn create_template_from_garment(
     let req = Request::from_parts(parts, axum::body::Body::from(bytes));
     let input = author::read_author_parts(req, s.0.cfg.max_body_bytes).await?;
     valid_name(&input.name)?;
+    store_authored(&s, move || author::author(&input)).await
+}
+
+/// Runs an authoring on the pool and stores its template as version 1: 201
+/// with its `Location` and the authoring's report.
+async fn store_authored(
+    s: &AppState,
+    run: impl FnOnce() -> Result<(Template, author::Authored), author::AuthorRequestError> + Send + 'static,
+) -> Result<Response, Problem> {
     let me = s.clone();
-    let limit = s.0.cfg.request_timeout();
     let report =
         s.0.pool
-            .run(limit, move || -> Result<author::Authored, Problem> {
-                let (t, report) = author::author(&input)?;
+            .run(s.0.cfg.request_timeout(), move || -> Result<author::Authored, Problem> {
+                let (t, report) = run()?;
                 let entry = me.0.store.put(None, &t.to_json(), true)?;
                 Ok(author::Authored { template: entry, ..report })
             })
@@ -750,17 +758,7 @@ async fn create_template_from_curves(
     check_key(&s, &headers, true)?;
     let input: author::CurvesUpload = parse_json_body(&bytes)?;
     valid_name(&input.name)?;
-    let me = s.clone();
-    let report =
-        s.0.pool
-            .run(s.0.cfg.request_timeout(), move || -> Result<author::Authored, Problem> {
-                let (t, report) = author::author_curves(&input)?;
-                let entry = me.0.store.put(None, &t.to_json(), true)?;
-                Ok(author::Authored { template: entry, ..report })
-            })
-            .await??;
-    let location = format!("/v1/templates/{}", report.template.name);
-    Ok((StatusCode::CREATED, [(header::LOCATION, location)], Json(report)).into_response())
+    store_authored(&s, move || author::author_curves(&input)).await
 }
 
 /// Replace a template (a new version; earlier versions stay readable).
