@@ -19,9 +19,8 @@ use crate::io::gltf::GltfReadOptions;
 use crate::template::format::Template;
 use crate::template::from_curves::{panels_from_curves, CurvePanel, CurvesOptions, FromCurvesError};
 use crate::template::from_garment::{
-    author_from_garment, design_body, detect_units, DesignBody, FromGarmentError, GarmentOptions, Unmapped,
+    author_from_garment, detect_units, DesignBody, FromGarmentError, GarmentOptions, Unmapped,
 };
-use crate::template::library::AuthorError;
 
 /// Multipart body of `POST /v1/templates/from-garment`.
 #[derive(Debug, utoipa::ToSchema)]
@@ -111,9 +110,9 @@ pub enum AuthorRequestError {
     /// No unit makes the garment garment-sized.
     #[error("the garment's size fits no unit (m, cm, mm): state `units`")]
     Units,
-    /// The design body could not be built (internal).
-    #[error(transparent)]
-    Body(#[from] AuthorError),
+    /// The design body could not be built (internal: the embedded model).
+    #[error("{0}")]
+    Body(String),
     /// Authoring failed.
     #[error(transparent)]
     Authoring(#[from] FromGarmentError),
@@ -182,8 +181,9 @@ pub fn author(parts: &AuthorParts) -> Result<(Template, Authored), AuthorRequest
         None => detect_units(&pieces).ok_or(AuthorRequestError::Units)?,
     };
     let pieces = scaled(pieces, units.metres());
-    let body = design_body(parts.body)?;
-    let a = author_from_garment(&parts.name, &pieces, &body, &parts.options)?;
+    // the process's copy of the design body (built once, shared with sketch edits)
+    let body = super::edit::design_body(parts.body).map_err(AuthorRequestError::Body)?;
+    let a = author_from_garment(&parts.name, &pieces, body, &parts.options)?;
     Ok(stored(a, parts.body, units))
 }
 
@@ -210,8 +210,8 @@ fn stored(a: crate::template::from_garment::Authored, body: DesignBody, units: U
 /// [`AuthorRequestError`].
 pub fn author_curves(input: &CurvesUpload) -> Result<(Template, Authored), AuthorRequestError> {
     let pieces = panels_from_curves(&input.panels, &input.curves)?;
-    let body = design_body(input.body)?;
-    let a = author_from_garment(&input.name, &pieces, &body, &input.options)?;
+    let body = super::edit::design_body(input.body).map_err(AuthorRequestError::Body)?;
+    let a = author_from_garment(&input.name, &pieces, body, &input.options)?;
     Ok(stored(a, input.body, Units::Metres))
 }
 
