@@ -8,16 +8,17 @@
 //!   2 mm mean and 6 mm at the 95th percentile of the designed surface, in
 //!   both directions (graded → designed, designed → graded);
 //! * the authored skirt graded on every fixture body and ASTM size passes
-//!   the bars of issues #7/#8 (`common/bars.rs`), but for the strain bar:
-//!   on its own design body it flattens within it (front 3.0 %, back
-//!   3.2 % p95, with the darts decided there), but not on every other body
-//!   (up to 9 %: the design's close fit over the seat and thighs, carried
-//!   by Below/Between, strains where another body's seat differs), so its
-//!   pieces are held to [`SKIRT_STRAIN_CEILING`], a guard against
-//!   regressions, not the bar. The bodysuit (helper-tights) is held to the
-//!   round trip only: its sleeves have no arm girths to follow (issue #18,
-//!   item 5) and its feet are closed; graded on other bodies its sleeves
-//!   and quarters tear (measured, see the issue's notes).
+//!   the bars of issues #7/#8 (`common/bars.rs`), strain included (worst
+//!   p95 3.85 %, ASTM size 20's front; it was 8.99 % before every node
+//!   below the hip hung from it, see
+//!   `regression_every_skirt_node_below_the_hip_hangs_from_it`). On issue
+//!   #7's population and its scan-like copies it reaches 4.27 % (and the
+//!   scan-like pop09's back 4.24 %), held to [`SKIRT_STRAIN_CEILING`] there
+//!   (`tests/population.rs`, and the pop09 regression below). The bodysuit
+//!   (helper-tights) is held to the round trip only: its sleeves have no
+//!   arm girths to follow (issue #18, item 5) and its feet are closed;
+//!   graded on other bodies its sleeves and quarters tear (measured, see
+//!   the issue's notes).
 
 use std::sync::OnceLock;
 
@@ -163,7 +164,6 @@ fn round_trip_onto_the_design_body() {
 fn the_authored_skirt_passes_the_grade_bars_on_every_fixture() {
     let design = obstacle(&design_body().mesh);
     let mut b = bars::Bars::default();
-    b.open_templates.push(("helper-skirt".into(), SKIRT_STRAIN_CEILING));
     let mut failures = Vec::new();
     for (name, a) in authored().iter().filter(|(n, _)| n == "helper-skirt") {
         let t = &a.template;
@@ -190,6 +190,32 @@ fn the_authored_skirt_passes_the_grade_bars_on_every_fixture() {
 /// decoding took it for a second ring node at that point, and the edge to
 /// the first had no length ("attached points 0 and 1 coincide"). Free nodes
 /// are no longer tied to a ring girth's points.
+/// Regression (issue #18): the authored skirt's front strained 8.99 % p95
+/// on ASTM size 0 and 10.4 % on pop13-f-slim-short (3.0 % on its design
+/// body), darts or none. Its nodes between the hip and the crotch (the
+/// garment goes round the trunk there, not round both legs) and its
+/// centre-front hem nodes (the hem dips there: no closed section within
+/// 3 cm above them) were left to Eq. (1), tied to the crotch point and the
+/// knees, and swung with those points' frames on other bodies. Every node
+/// below the hip line now hangs from it.
+#[test]
+fn regression_every_skirt_node_below_the_hip_hangs_from_it() {
+    let (_, skirt) = &authored()[0];
+    let t = &skirt.template;
+    let hip = grade3d::template::girth::girth_plane(design_body(), grade3d::body::vocab::CurveId::Hip).unwrap();
+    let below: std::collections::BTreeSet<u32> = t.below.iter().map(|b| b.node).collect();
+    let loose: Vec<(usize, String, f64)> = t
+        .nodes
+        .iter()
+        .enumerate()
+        .map(|(i, n)| (i, n.point.to_string(), -hip.signed_distance(glam::DVec3::from_array(n.reference))))
+        .filter(|(i, _, drop)| *drop > 0.02 && !below.contains(&(*i as u32)))
+        .collect();
+    assert!(loose.is_empty(), "nodes below the hip left to Eq. (1): {loose:?}");
+    // and the skirt declares that its found darts follow a pattern maker's rules
+    assert!(t.defaults.guided_darts);
+}
+
 #[test]
 fn regression_the_authored_skirt_decodes_on_pop39() {
     use grade3d::mannequin::population::sample_population;
@@ -278,14 +304,6 @@ fn regression_the_authored_skirt_on_pop15_and_pop09_scan() {
     assert!(near.is_empty(), "nodes {near:?} lie within 10 mm of the hip line");
 }
 
-/// The curve skirt's open ceilings (p95 edge strain, |E_s|): measured
-/// 11.63 % (ASTM size 0's lower front) and 2.78 % (its upper front) over
-/// the five fixture bodies it is graded on; guards against regressions,
-/// not the bars (4 %, 2 %), which it does not meet off its design body.
-const CURVE_SKIRT_STRAIN_CEILING: f64 = 0.125;
-/// See [`CURVE_SKIRT_STRAIN_CEILING`].
-const CURVE_SKIRT_AREA_CEILING: f64 = 0.03;
-
 /// Issue #18 item 2: an A-line skirt drawn as curves (seed 001) on the
 /// design body — its waist, hip and hem as ellipses round the body's
 /// girths (20 mm out at the waist, 25 mm at the hip, the hem 350 mm below
@@ -293,8 +311,11 @@ const CURVE_SKIRT_AREA_CEILING: f64 = 0.03;
 /// (front and back, waist to hip and hip to hem), authored like a designed
 /// garment: it round-trips onto its design body within the bars, its hip
 /// line (also the seam between the bands) stays one ring, and graded on
-/// every fourth fixture body it meets the bars of issues #7/#8 but strain
-/// and area accuracy, which are held to the open ceilings above.
+/// every fourth fixture body it meets the bars of issues #7/#8, strain and
+/// area accuracy included (worst p95 2.44 %, |E_s| 0.59 %; they were 11.63 %
+/// and 2.78 % before every node below the hip hung from it, and its lower
+/// front needs darts below the hip: a cone between two ellipses of
+/// different shape, 19 % p95 without them, `AutoDartOptions::hanging_strain_p95`).
 #[test]
 fn a_skirt_from_curves_round_trips_and_grades() {
     use grade3d::body::vocab::CurveId;
@@ -365,7 +386,6 @@ fn a_skirt_from_curves_round_trips_and_grades() {
     // graded on fixture bodies, every bar
     let plan = block(&a.template, body, Some(&design), &GradeOptions::default()).unwrap();
     let mut b = bars::Bars::default();
-    b.open_templates.push(("curve-skirt".into(), CURVE_SKIRT_STRAIN_CEILING));
     for (name, mesh, lm) in fixture_bodies().into_iter().step_by(4) {
         let fb = derive_features(mesh, &lm, &DeriveOptions::default()).unwrap();
         let o = obstacle(&fb.mesh);
@@ -374,14 +394,5 @@ fn a_skirt_from_curves_round_trips_and_grades() {
         b.check(&a.template, &fb, &o, &g, &name, false);
     }
     b.report();
-    // area accuracy is open on this garment (issue #18): printed, held to the
-    // ceiling measured; strain is held to its ceiling by `open_templates`;
-    // every other bar holds
-    let (open, failures): (Vec<&String>, Vec<&String>) = b.failures.iter().partition(|f| f.contains(": E_s "));
-    for f in &open {
-        eprintln!("open: {f}");
-        let e: f64 = f.rsplit(' ').next().and_then(|v| v.parse().ok()).unwrap();
-        assert!(e.abs() <= CURVE_SKIRT_AREA_CEILING, "{f}");
-    }
-    assert!(failures.is_empty(), "{failures:#?}");
+    assert!(b.failures.is_empty(), "{:#?}", b.failures);
 }

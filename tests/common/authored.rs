@@ -12,12 +12,12 @@ use grade3d::mannequin::landmarks::hm08_landmarks;
 use grade3d::mannequin::model::BodyModel;
 use grade3d::template::garment_panels::PanelMesh;
 
-/// The authored skirt's strain ceiling (p95 edge strain; `tests/from_garment.rs`'s
-/// module docs): measured 8.99 % at worst over the 20 fixture bodies
-/// (ASTM size 0's front) and 10.62 % over the issue #7 population
-/// (pop13-f-slim-short-scan's front, `tests/population.rs`); a guard
-/// against regressions, not the bar.
-pub const SKIRT_STRAIN_CEILING: f64 = 0.11;
+/// The authored skirt's strain ceiling on issue #7's population (p95 edge
+/// strain; `tests/from_garment.rs`'s module docs): the 20 fixture bodies
+/// meet the 4 % bar (3.85 % at worst), the population's 80 grades reach
+/// 4.27 % (pop04-f-heavy-medium's front; 10.62 % before every node below
+/// the hip hung from it). A guard against regressions, not the bar.
+pub const SKIRT_STRAIN_CEILING: f64 = 0.045;
 
 /// MakeHuman's base mesh with its features: the helpers' design body.
 pub fn design_body() -> &'static FeatureBody {

@@ -21,14 +21,16 @@
 
 use std::time::Instant;
 
-use typed_index_collections::TiVec;
+use typed_index_collections::{TiSlice, TiVec};
 
 use serde::{Deserialize, Serialize};
 
 use crate::body::feature::FeatureBody;
 use crate::collide::Obstacle;
-use crate::geom::mesh::VertexId;
-use crate::pattern::garment::{pattern_with_darts, DartPlan, DartSource, GarmentPattern, PatternError, PatternOptions};
+use crate::geom::mesh::{FaceId, VertexId};
+use crate::pattern::garment::{
+    pattern_with_darts, DartBarrier, DartPlan, DartSource, GarmentPattern, PatternError, PatternOptions,
+};
 use crate::refine::clear::{clear_coarse, clear_surface, ClearError, ClearOptions};
 use crate::refine::collision::{Collider, CollisionOptions, CollisionReport};
 use crate::refine::lineage::{node_vertex, Lineage};
@@ -220,6 +222,26 @@ pub fn girth_lines(
     out
 }
 
+/// The refined vertices of the garment's hanging region: those of the fine
+/// faces whose coarse face has a node hanging below a girth
+/// ([`Template::below`]). Below its lowest girth a skirt or dress falls
+/// straight (a ruled surface: the method of [`Below`]), and darts go there
+/// only where a piece needs them ([`DartBarrier::hanging`]).
+///
+/// [`Below`]: crate::template::format::Below
+pub fn hanging_vertices(
+    t: &Template,
+    triangles: &TiSlice<FaceId, [VertexId; 3]>,
+    levels: usize,
+) -> std::collections::HashSet<VertexId> {
+    let hung: std::collections::HashSet<u32> = t.below.iter().map(|b| b.node).collect();
+    let per = 1usize << (2 * levels);
+    (0..t.faces.len())
+        .filter(|&f| t.face_nodes(f).iter().any(|n| hung.contains(n)))
+        .flat_map(|f| (f * per..(f + 1) * per).filter_map(|k| triangles.get(FaceId::from(k))).flatten().copied())
+        .collect()
+}
+
 fn ms(since: Instant) -> f64 {
     since.elapsed().as_secs_f64() * 1e3
 }
@@ -295,6 +317,7 @@ pub fn grade_with_darts(
     let collision_opts = CollisionOptions { clearance_mm, ..opts.collision };
     let mut pattern_opts = opts.pattern;
     pattern_opts.piece.seam_allowance_mm = opts.seam_allowance_mm.unwrap_or(t.defaults.seam_allowance_mm);
+    pattern_opts.auto_darts.guided |= t.defaults.guided_darts;
 
     let start = Instant::now();
     let mut m0 = decode(t, body, t.defaults.relocation)?;
@@ -353,9 +376,15 @@ pub fn grade_with_darts(
     let topology = Topology { triangles: &mesh.triangles, nodes: &decoded };
     let symmetric = symmetrize(t, body, cut_from, Some(topology), &opts.symmetry);
     let cut_from = symmetric.as_deref().unwrap_or(cut_from);
-    let pattern = pattern_with_darts(t, cut_from, &mesh.triangles, &lineage, size, &pattern_opts, darts)?;
-    let pattern_ms = ms(start);
     let girth_lines = girth_lines(t, body, &decoded, &hung, &mesh);
+    // found darts run through no girth line, and into the region that hangs below one only where
+    // a piece needs them there
+    let barrier = DartBarrier {
+        girth_lines: girth_lines.values().flatten().copied().collect(),
+        hanging: hanging_vertices(t, &mesh.triangles, lineage.levels()),
+    };
+    let pattern = pattern_with_darts(t, cut_from, &mesh.triangles, &lineage, size, &pattern_opts, darts, &barrier)?;
+    let pattern_ms = ms(start);
     let cut_positions = cut_from.to_owned();
     Ok(Graded {
         cut_positions,

@@ -12,6 +12,9 @@
 //! coherent runs, so most blocks are skipped: 3–10× fewer faces visited on
 //! an hm08 body).
 //!
+//! [`PointGrid`] answers "is there a point within `r` of `q`" over a point
+//! set by a uniform grid of cell `r` (the 27 cells around `q`).
+//!
 //! The disc-averaged normal `n(q) = normalize(Σ_f A_f n_f)` over the faces
 //! whose closest point lies within radius `r` of `q` does not depend on how
 //! finely the surface is meshed, which keeps the local frames of seed 000
@@ -213,6 +216,51 @@ impl SphereIndex {
     }
 }
 
+/// Points hashed into a uniform grid of cell `r` (module docs): the
+/// points within `r` of a query are in the 27 cells around it.
+#[derive(Debug, Clone)]
+pub struct PointGrid {
+    cell: f64,
+    cells: std::collections::HashMap<[i64; 3], Vec<usize>>,
+    points: Vec<DVec3>,
+}
+
+impl PointGrid {
+    /// The grid of `points` with cells of side `r` (> 0, m).
+    pub fn new(points: &[DVec3], r: f64) -> Self {
+        let mut cells: std::collections::HashMap<[i64; 3], Vec<usize>> = std::collections::HashMap::new();
+        for (i, &p) in points.iter().enumerate() {
+            cells.entry(Self::key(p, r)).or_default().push(i);
+        }
+        Self { cell: r, cells, points: points.to_vec() }
+    }
+
+    fn key(p: DVec3, r: f64) -> [i64; 3] {
+        (p / r).floor().as_i64vec3().to_array()
+    }
+
+    /// The index of the point nearest to `q` among those within `r` of it
+    /// (`r` at most the cell size; ties to the lower index), if any.
+    pub fn nearest_within(&self, q: DVec3, r: f64) -> Option<usize> {
+        let c = Self::key(q, self.cell);
+        let mut best: Option<(f64, usize)> = None;
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    let Some(list) = self.cells.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) else { continue };
+                    for &i in list {
+                        let d = self.points[i].distance(q);
+                        if d <= r && best.is_none_or(|(bd, bi)| d < bd || (d == bd && i < bi)) {
+                            best = Some((d, i));
+                        }
+                    }
+                }
+            }
+        }
+        best.map(|(_, i)| i)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -273,5 +321,16 @@ mod tests {
             assert_eq!(index.closest_point(&mesh, p), closest_point(&mesh, p));
             assert_eq!(index.disc_normal(&mesh, p, 0.02), disc_normal(&mesh, p, 0.02));
         }
+    }
+
+    #[test]
+    fn point_grid_finds_the_nearest_within_reach() {
+        let pts = [DVec3::ZERO, DVec3::new(0.1, 0.0, 0.0), DVec3::new(0.1, 0.05, 0.0), DVec3::new(-0.35, 0.0, 0.0)];
+        let g = PointGrid::new(&pts, 0.1);
+        assert_eq!(g.nearest_within(DVec3::new(0.09, 0.01, 0.0), 0.1), Some(1));
+        assert_eq!(g.nearest_within(DVec3::new(-0.3, 0.0, 0.0), 0.1), Some(3));
+        // beyond reach, and exactly at it
+        assert_eq!(g.nearest_within(DVec3::new(-0.2, 0.0, 0.0), 0.1), None);
+        assert_eq!(g.nearest_within(DVec3::new(0.0, 0.0, 0.1), 0.1), Some(0));
     }
 }

@@ -345,11 +345,30 @@ pub struct GradingDefaults {
     pub seam_allowance_mm: f64,
     /// Relocation equation. Default Eq. (1).
     pub relocation: Relocation,
+    /// Found darts follow a pattern maker's rules
+    /// ([`crate::pattern::darts::DartGuides`]: along the grain and opening
+    /// across it, in mirrored pairs on a piece that is its own mirror image,
+    /// short of the girth lines, kept out of the region hanging below the
+    /// lowest girth unless a piece needs them there). Default false, as in
+    /// documents without it: the built-in templates, whose found darts top
+    /// up the darts they declare (under the rules the fitted bodice's graded
+    /// shoulder steps vary by up to 5.2 mm where 2.9 mm is allowed: its
+    /// darts are to be drafted as declared ones first, issue #18's notes).
+    /// Templates authored from a garment or from curves, which declare no
+    /// darts, set it.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub guided_darts: bool,
 }
 
 impl Default for GradingDefaults {
     fn default() -> Self {
-        Self { levels: 3, clearance_mm: 3.0, seam_allowance_mm: 10.0, relocation: Relocation::Eq1Frame }
+        Self {
+            levels: 3,
+            clearance_mm: 3.0,
+            seam_allowance_mm: 10.0,
+            relocation: Relocation::Eq1Frame,
+            guided_darts: false,
+        }
     }
 }
 

@@ -1,0 +1,167 @@
+//! Development probe: author MakeHuman's helper skirt (issue #18) on its
+//! design body, decide its block there, and grade it on the ASTM sizes and
+//! on issue #7's population bodies, printing each piece's p95 edge strain,
+//! |E_s| and darts (mouth height above the hip plane, apex height, intake).
+//!
+//! `cargo run --release --example authored_probe -- [filter]`
+//! (`POP=6,15,9s` adds population bodies, `9s` body 9's scan-like copy;
+//! `DECIDE=1` decides the darts on every body instead of carrying the
+//! block's; `AUTO='{"enabled":false}'` overrides the found-dart search's
+//! options; `NODES=1` lists how each node is placed.)
+
+use std::path::Path;
+
+use grade3d::body::derive::Landmarks;
+use grade3d::body::derive::{derive_features, DeriveOptions};
+use grade3d::body::feature::FeatureBody;
+use grade3d::body::vocab::CurveId;
+use grade3d::collide::cache::Obstacle;
+use grade3d::collide::render::{GpuContext, RenderOptions};
+use grade3d::geom::winding::{WindingOptions, WindingTree};
+use grade3d::io::gltf::{read_mesh, GltfReadOptions};
+use grade3d::io::landmarks::parse_landmarks;
+use grade3d::mannequin::landmarks::hm08_landmarks;
+use grade3d::mannequin::model::BodyModel;
+use grade3d::mannequin::population::{sample_population, scan_like};
+use grade3d::pattern::garment::DartSource;
+use grade3d::pipeline::{grade_with_darts, GradeOptions, Graded};
+use grade3d::template::from_garment::{author_from_garment, GarmentOptions};
+use grade3d::template::garment_panels::PanelMesh;
+use grade3d::template::girth::girth_plane;
+
+fn main() {
+    let filter = std::env::args().nth(1);
+    let gpu = GpuContext::new().unwrap();
+    let obstacle = |b: &FeatureBody| Obstacle {
+        maps: gpu.render(&b.mesh, &RenderOptions::default()).unwrap(),
+        tree: WindingTree::new(&b.mesh, &WindingOptions::default()),
+    };
+    let model = BodyModel::embedded().unwrap();
+    let base = model.base_mesh().unwrap();
+    let lm = hm08_landmarks(model, &base, &Default::default()).unwrap();
+    let design = derive_features(base, &lm, &DeriveOptions::default()).unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures");
+    let m = read_mesh(&std::fs::read(root.join("garments/helper-skirt.glb")).unwrap(), &Default::default())
+        .unwrap()
+        .welded(1e-9)
+        .unwrap();
+    let piece = PanelMesh {
+        name: "skirt".into(),
+        positions: m.positions().to_vec(),
+        triangles: m.triangles().iter().map(|t| t.map(|v| v.0)).collect(),
+    };
+    let t = author_from_garment("helper-skirt", &[piece], &design, &GarmentOptions::default()).unwrap().template;
+    if std::env::var("NODES").is_ok() {
+        let hip = girth_plane(&design, CurveId::Hip).unwrap();
+        for (i, n) in t.nodes.iter().enumerate() {
+            let i = i as u32;
+            let kind = if t.below.iter().any(|b| b.node == i) {
+                "below"
+            } else if t.between.iter().any(|b| b.node == i) {
+                "between"
+            } else {
+                "eq1"
+            };
+            let p = glam::DVec3::from_array(n.reference);
+            println!(
+                "node {i:3} {kind:8} {:24} {:+5.0} mm above hip, x {:+4.0} z {:+4.0}",
+                n.point.to_string(),
+                hip.signed_distance(p) * 1e3,
+                p.x * 1e3,
+                p.z * 1e3
+            );
+        }
+    }
+    let mut go = GradeOptions::default();
+    if let Ok(a) = std::env::var("AUTO") {
+        go.pattern.auto_darts = serde_json::from_str(&a).unwrap();
+    }
+    let design_obstacle = obstacle(&design);
+    let g = grade_with_darts(&t, &design, Some(&design_obstacle), "design", &go, DartSource::Decide).unwrap();
+    let plan = g.pattern.dart_plan.clone();
+    print(&design, "design", &g);
+    let decide = std::env::var("DECIDE").is_ok();
+    let mut bodies: Vec<(String, FeatureBody)> = Vec::new();
+    let mut names: Vec<String> = std::fs::read_dir(root.join("astm"))
+        .unwrap()
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter_map(|n| n.strip_suffix(".glb").map(str::to_owned))
+        .collect();
+    names.sort();
+    for name in names.into_iter().filter(|n| filter.as_ref().is_none_or(|f| n.contains(f.as_str()))) {
+        let dir = root.join("astm");
+        let mesh =
+            read_mesh(&std::fs::read(dir.join(format!("{name}.glb"))).unwrap(), &GltfReadOptions::default()).unwrap();
+        let lm =
+            parse_landmarks(&std::fs::read_to_string(dir.join(format!("{name}.landmarks.json"))).unwrap()).unwrap();
+        bodies.push((name, derive_features(mesh, &lm, &DeriveOptions::default()).unwrap()));
+    }
+    if let Ok(pop) = std::env::var("POP") {
+        let people = sample_population(40, 13);
+        for item in pop.split(',') {
+            // `9s`: the scan-like copy of body 9 (tests/population.rs)
+            let scan = item.ends_with('s');
+            let i: usize = item.trim_end_matches('s').parse().unwrap();
+            let p = &people[i];
+            let mesh = model.build(&p.params).unwrap();
+            let lm = hm08_landmarks(model, &mesh, &Default::default()).unwrap();
+            if scan {
+                let s = scan_like(&mesh, 60_000, 1e-3, 13 ^ i as u64).unwrap();
+                let lm = Landmarks { points: lm.points.clone(), curves: Default::default() };
+                bodies.push((format!("{}-scan", p.name), derive_features(s, &lm, &DeriveOptions::default()).unwrap()));
+            } else {
+                bodies.push((p.name.clone(), derive_features(mesh, &lm, &DeriveOptions::default()).unwrap()));
+            }
+        }
+    }
+    for (name, body) in &bodies {
+        let o = obstacle(body);
+        let src = if decide { DartSource::Decide } else { DartSource::Block(&plan) };
+        let start = std::time::Instant::now();
+        match grade_with_darts(&t, body, Some(&o), name, &go, src) {
+            Ok(g) => {
+                print(body, name, &g);
+                println!("    {:.1} s", start.elapsed().as_secs_f64());
+            }
+            Err(e) => println!("{name}: ERROR {e}"),
+        }
+    }
+}
+
+fn print(body: &FeatureBody, name: &str, g: &Graded) {
+    let hip = girth_plane(body, CurveId::Hip).unwrap();
+    let mut line = format!("{name:28}");
+    for r in &g.pattern.reports {
+        let d = &r.distortion;
+        line += &format!(" {}:{:.2}%/{:+.2}%", r.name, d.strain_p95 * 100.0, d.area_accuracy * 100.0);
+        if let Some(h) = &r.hotspot {
+            line += &format!("[{} {:.0}mm]", h.near, h.distance_mm);
+        }
+        if r.sew_line_self_intersects {
+            line += "(X)";
+        }
+    }
+    println!("{line}");
+    for p in &g.pattern.pieces {
+        let widths: Vec<String> = p
+            .internal_lines
+            .iter()
+            .filter(|l| l.name.contains("dart"))
+            .map(|l| format!("{:.1}", l.points[0].distance(l.points[l.points.len() - 1])))
+            .collect();
+        println!("    {} dart openings (mm): {}", p.name, widths.join(" "));
+    }
+    for d in &g.pattern.dart_plan.found {
+        let (Some(&m), Some(&a)) = (d.chain.first(), d.chain.last()) else { continue };
+        let (pm, pa) = (g.cut_positions[m], g.cut_positions[a]);
+        let fd = g.pattern.reports.iter().flat_map(|r| &r.found_darts).find(|f| f.name == d.name);
+        println!(
+            "    {} mouth {:+.0} mm apex {:+.0} mm above hip, mouth x {:+.0} mm, intake {:.1} mm",
+            d.name,
+            hip.signed_distance(pm) * 1e3,
+            hip.signed_distance(pa) * 1e3,
+            pm.x * 1e3,
+            fd.map_or(f64::NAN, |f| f.intake_mm)
+        );
+    }
+}
