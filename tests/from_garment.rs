@@ -216,6 +216,53 @@ fn regression_every_skirt_node_below_the_hip_hangs_from_it() {
     assert!(t.defaults.guided_darts);
 }
 
+/// Issue #18: the authored skirt's darts, decided on its design body, are
+/// drafted as a pattern maker drafts a skirt's (`GradingDefaults::guided_darts`):
+/// waist darts in mirrored pairs, each opening on the waist edge and ending
+/// above the hip line, each opening by the least intake in the piece as cut,
+/// a pair's two openings within 10 % of each other. Before: a horizontal dart
+/// from the side seam at the thigh, one back waist dart without its partner,
+/// and (with the hanging region open) slits from the hem 58–70 cm long.
+#[test]
+fn the_authored_skirts_darts_are_mirrored_waist_darts() {
+    use grade3d::pattern::darts::DartOrigin;
+    let (_, skirt) = &authored()[0];
+    let t = &skirt.template;
+    let design = obstacle(&design_body().mesh);
+    let g = grade_with_darts(t, design_body(), Some(&design), "design", &GradeOptions::default(), DartSource::Decide)
+        .unwrap();
+    let hip = grade3d::template::girth::girth_plane(design_body(), grade3d::body::vocab::CurveId::Hip).unwrap();
+    let plan = &g.pattern.dart_plan.found;
+    assert!(!plan.is_empty() && plan.len().is_multiple_of(2), "{plan:?}");
+    for r in &g.pattern.reports {
+        for pair in r.found_darts.chunks(2) {
+            assert_eq!(pair.len(), 2, "{}: {pair:?}", r.name);
+            assert_eq!((pair[0].origin, pair[1].origin), (DartOrigin::Found, DartOrigin::Mirrored));
+            // the apexes mirror each other across the body's mid-plane (x = 0 on the base mesh)
+            let (a, b) = (pair[0].apex, pair[1].apex);
+            assert!((a.x + b.x).abs() < 0.015 && (a.y - b.y).abs() < 0.015, "{a} {b}");
+        }
+    }
+    for d in plan {
+        let (mouth, apex) = (g.cut_positions[d.chain[0]], g.cut_positions[d.chain[d.chain.len() - 1]]);
+        let (m, a) = (hip.signed_distance(mouth), hip.signed_distance(apex));
+        assert!(m > a && a > 0.0, "{}: mouth {m:.3} m, apex {a:.3} m above the hip", d.name);
+    }
+    for p in &g.pattern.pieces {
+        let openings: Vec<f64> = p
+            .internal_lines
+            .iter()
+            .filter(|l| l.name.starts_with("dart_auto"))
+            .map(|l| l.points[0].distance(l.points[l.points.len() - 1]))
+            .collect();
+        eprintln!("{}: dart openings {openings:.1?} mm", p.name);
+        for pair in openings.chunks(2) {
+            assert!(pair.iter().all(|&o| o >= 3.0), "{}: {pair:?}", p.name);
+            assert!((pair[0] - pair[1]).abs() <= 0.1 * pair[0].max(pair[1]), "{}: {pair:?}", p.name);
+        }
+    }
+}
+
 #[test]
 fn regression_the_authored_skirt_decodes_on_pop39() {
     use grade3d::mannequin::population::sample_population;
