@@ -379,9 +379,14 @@ pub fn grade_with_darts(
     let girth_lines = girth_lines(t, body, &decoded, &hung, &mesh);
     // found darts run through no girth line, and into the region that hangs below one only where
     // a piece needs them there
-    let barrier = DartBarrier {
-        girth_lines: girth_lines.values().flatten().copied().collect(),
-        hanging: hanging_vertices(t, &mesh.triangles, lineage.levels()),
+    // (only guided darts read it)
+    let barrier = if pattern_opts.auto_darts.guided {
+        DartBarrier {
+            girth_lines: girth_lines.values().flatten().copied().collect(),
+            hanging: hanging_vertices(t, &mesh.triangles, lineage.levels()),
+        }
+    } else {
+        DartBarrier::default()
     };
     let pattern = pattern_with_darts(t, cut_from, &mesh.triangles, &lineage, size, &pattern_opts, darts, &barrier)?;
     let pattern_ms = ms(start);

@@ -455,7 +455,7 @@ fn candidate_paths(
     // a mouth along the grain from its apex, on an outline that runs across the grain there
     // (any outline vertex without a grain)
     let (cos_max, sin_max) = (opts.max_grain_angle_deg.to_radians().cos(), opts.max_grain_angle_deg.to_radians().sin());
-    let n_out = panel.outline.len();
+    let n_out = if guides.grain.is_some() { panel.outline.len() } else { 0 };
     let tangent: std::collections::HashMap<PanelVertex, DVec3> = (0..n_out)
         .map(|k| {
             let (prev, next) = (panel.outline[(k + n_out - 1) % n_out], panel.outline[(k + 1) % n_out]);

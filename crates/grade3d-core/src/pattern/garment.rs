@@ -932,8 +932,8 @@ fn pass_darts(
     let mut found_darts = vec![Vec::new(); panels.len()];
     // with negotiated seams, the search's last flattening is the free one the negotiation needs
     let mut free: Vec<Option<Trial>> = vec![None; panels.len()];
-    let plane = mirror_plane(t, positions);
     if find_darts {
+        let plane = mirror_plane(t, positions);
         // the panels' searches are independent: side by side on rayon's pool (issue #15),
         // the first failure in panel order reported
         let fresh: Vec<(usize, Result<Searched, PatternError>)> = (0..panels.len())
@@ -1115,13 +1115,13 @@ fn dart_guides(
         let (a, b) = (positions.get(node_vertex(p.grain.from))?, positions.get(node_vertex(p.grain.to))?);
         (*b - *a).try_normalize()
     });
-    let reach = panel
-        .triangles
-        .iter()
-        .flat_map(|f| (0..3).map(move |k| (f[k], f[(k + 1) % 3])))
-        .map(|(a, b)| panel.positions[a].distance(panel.positions[b]))
-        .fold(opts.mirror_tolerance_mm * 1e-3, f64::max);
     let own_image = plane.filter(|&(n, d)| {
+        let reach = panel
+            .triangles
+            .iter()
+            .flat_map(|f| (0..3).map(move |k| (f[k], f[(k + 1) % 3])))
+            .map(|(a, b)| panel.positions[a].distance(panel.positions[b]))
+            .fold(opts.mirror_tolerance_mm * 1e-3, f64::max);
         let index = crate::geom::query::PointGrid::new(&panel.positions.raw[..panel.unique], reach);
         panel.positions.raw[..panel.unique].iter().all(|&p| {
             let q = p - 2.0 * (n.dot(p) - d) * n;
