@@ -7,7 +7,9 @@
 //! (`POP=6,15,9s` adds population bodies, `9s` body 9's scan-like copy;
 //! `DECIDE=1` decides the darts on every body instead of carrying the
 //! block's; `AUTO='{"enabled":false}'` overrides the found-dart search's
-//! options; `NODES=1` lists how each node is placed.)
+//! options; `NODES=1` lists how each node is placed; `TEMPLATE=a-line-skirt`
+//! probes that built-in template on its reference body instead; `LINES=1`
+//! prints each piece's internal lines and their problems.)
 
 use std::path::Path;
 
@@ -36,11 +38,11 @@ fn main() {
         maps: gpu.render(&b.mesh, &RenderOptions::default()).unwrap(),
         tree: WindingTree::new(&b.mesh, &WindingOptions::default()),
     };
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures");
     let model = BodyModel::embedded().unwrap();
     let base = model.base_mesh().unwrap();
     let lm = hm08_landmarks(model, &base, &Default::default()).unwrap();
-    let design = derive_features(base, &lm, &DeriveOptions::default()).unwrap();
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures");
+    let mut design = derive_features(base, &lm, &DeriveOptions::default()).unwrap();
     let m = read_mesh(&std::fs::read(root.join("garments/helper-skirt.glb")).unwrap(), &Default::default())
         .unwrap()
         .welded(1e-9)
@@ -50,7 +52,24 @@ fn main() {
         positions: m.positions().to_vec(),
         triangles: m.triangles().iter().map(|t| t.map(|v| v.0)).collect(),
     };
-    let t = author_from_garment("helper-skirt", &[piece], &design, &GarmentOptions::default()).unwrap().template;
+    let t = match std::env::var("TEMPLATE") {
+        Ok(name) if name.starts_with("drawn:") => {
+            // a drawn style authored here: `GOPTS` (JSON) overrides the authoring options
+            design = grade3d::template::library::reference_body().unwrap();
+            // as tests/from_garment.rs reads it: the fixture OBJ (its vertices numbered by first use)
+            let obj = root.join(format!("garments/{}.obj", &name["drawn:".len()..]));
+            let pieces = grade3d::io::obj::read_obj_panels(&std::fs::read_to_string(obj).unwrap()).unwrap();
+            let mut o: GarmentOptions =
+                std::env::var("GOPTS").map(|j| serde_json::from_str(&j).unwrap()).unwrap_or_default();
+            o.cut = grade3d::template::from_garment::TubeCut::None;
+            author_from_garment(&name[6..], &pieces, &design, &o).unwrap().template
+        }
+        Ok(name) => {
+            design = grade3d::template::library::reference_body().unwrap();
+            grade3d::template::library::builtin().unwrap().into_iter().find(|t| t.name == name).unwrap()
+        }
+        Err(_) => author_from_garment("helper-skirt", &[piece], &design, &GarmentOptions::default()).unwrap().template,
+    };
     if std::env::var("NODES").is_ok() {
         let hip = girth_plane(&design, CurveId::Hip).unwrap();
         for (i, n) in t.nodes.iter().enumerate() {
@@ -95,6 +114,22 @@ fn main() {
         let lm =
             parse_landmarks(&std::fs::read_to_string(dir.join(format!("{name}.landmarks.json"))).unwrap()).unwrap();
         bodies.push((name, derive_features(mesh, &lm, &DeriveOptions::default()).unwrap()));
+    }
+    if std::env::var("FIXTURES").is_ok() {
+        let dir = root.join("bodies");
+        let mut names: Vec<String> = std::fs::read_dir(&dir)
+            .unwrap()
+            .filter_map(|e| e.ok()?.file_name().into_string().ok())
+            .filter_map(|n| n.strip_suffix(".glb").map(str::to_owned))
+            .collect();
+        names.sort();
+        for name in names {
+            let mesh = read_mesh(&std::fs::read(dir.join(format!("{name}.glb"))).unwrap(), &GltfReadOptions::default())
+                .unwrap();
+            let lm =
+                parse_landmarks(&std::fs::read_to_string(dir.join(format!("{name}.landmarks.json"))).unwrap()).unwrap();
+            bodies.push((name, derive_features(mesh, &lm, &DeriveOptions::default()).unwrap()));
+        }
     }
     if let Ok(pop) = std::env::var("POP") {
         let people = sample_population(40, 13);
@@ -141,6 +176,9 @@ fn print(body: &FeatureBody, name: &str, g: &Graded) {
             line += "(X)";
         }
     }
+    if g.collision.surface.pairs_after > 0 {
+        line += &format!(" THROUGH:{}", g.collision.surface.pairs_after);
+    }
     println!("{line}");
     for p in &g.pattern.pieces {
         let widths: Vec<String> = p
@@ -150,6 +188,26 @@ fn print(body: &FeatureBody, name: &str, g: &Graded) {
             .map(|l| format!("{:.1}", l.points[0].distance(l.points[l.points.len() - 1])))
             .collect();
         println!("    {} dart openings (mm): {}", p.name, widths.join(" "));
+    }
+    if std::env::var("LINES").is_ok() {
+        for p in &g.pattern.pieces {
+            for l in &p.internal_lines {
+                let (a, b) = (l.points[0], l.points[l.points.len() - 1]);
+                println!(
+                    "    {} {}: {} points, ({:.0},{:.0}) → ({:.0},{:.0})",
+                    p.name,
+                    l.name,
+                    l.points.len(),
+                    a.x,
+                    a.y,
+                    b.x,
+                    b.y
+                );
+            }
+            for e in grade3d::pattern::lines::line_problems(p) {
+                println!("    {} PROBLEM {e:?}", p.name);
+            }
+        }
     }
     for d in &g.pattern.dart_plan.found {
         let (Some(&m), Some(&a)) = (d.chain.first(), d.chain.last()) else { continue };

@@ -8,13 +8,17 @@
 //!   2 mm mean and 6 mm at the 95th percentile of the designed surface, in
 //!   both directions (graded → designed, designed → graded);
 //! * the authored skirt graded on every fixture body and ASTM size passes
-//!   the bars of issues #7/#8 (`common/bars.rs`), strain included (worst
-//!   p95 3.90 %, male-heavy-short-african's back; it was 8.99 % before every
-//!   node below the hip hung from it, see
+//!   the bars of issues #7/#8 (`common/bars.rs`) but strain, which is held
+//!   to [`SKIRT_STRAIN_CEILING`]: worst p95 4.38 %, female-slim-short-asian's
+//!   back (3.90 % while its back could take two mirrored pairs of found
+//!   darts; issue #14 caps them at two a piece, a pair counting two; it was
+//!   8.99 % before every node below the hip hung from it, see
 //!   `regression_every_skirt_node_below_the_hip_hangs_from_it`). On issue
-//!   #7's population and its scan-like copies it reaches 4.43 % (the
-//!   scan-like pop09's front), held to [`SKIRT_STRAIN_CEILING`] there
-//!   (`tests/population.rs`, and the pop09 regression below). The bodysuit
+//!   #7's population and its scan-like copies it reaches 4.56 %
+//!   (pop00-f-slim-short's back), under the same ceiling
+//!   (`tests/population.rs`, and the pop09 regression below);
+//! * the styles drawn as curves (`template::drawn`, issue #18 item 5): see
+//!   `drawn_styles_round_trip_and_the_a_line_skirt_grades`. The bodysuit
 //!   (helper-tights) is held to the round trip only: its sleeves have no
 //!   arm girths to follow (issue #18, item 5) and its feet are closed;
 //!   graded on other bodies its sleeves and quarters tear (measured, see
@@ -44,7 +48,7 @@ use common::fixture_bodies;
 mod authored;
 #[path = "common/bars.rs"]
 mod bars;
-use authored::{design_body, garment, SKIRT_STRAIN_CEILING};
+use authored::{design_body, garment, A_LINE_STRAIN_CEILING, SKIRT_STRAIN_CEILING};
 
 /// How far decoding on the design body may put a node from where authoring
 /// stored it, m.
@@ -165,6 +169,9 @@ fn the_authored_skirt_passes_the_grade_bars_on_every_fixture() {
     let design = obstacle(&design_body().mesh);
     let mut b = bars::Bars::default();
     let mut failures = Vec::new();
+    // its strain held to its ceiling: female-slim-short-asian's back reaches 4.38 % since issue
+    // #14's cap of two found darts a piece counts a mirrored pair as two
+    b.open_templates.push(("helper-skirt".into(), SKIRT_STRAIN_CEILING));
     for (name, a) in authored().iter().filter(|(n, _)| n == "helper-skirt") {
         let t = &a.template;
         let plan = block(t, design_body(), Some(&design), &GradeOptions::default()).unwrap();
@@ -400,6 +407,7 @@ fn a_skirt_from_curves_round_trips_and_grades() {
                 top: arc(upper, a0, a0 + PI),
                 left: side(upper, a0),
                 right: side(upper, a0 + PI),
+                piece: None,
             });
         }
     }
@@ -431,15 +439,118 @@ fn a_skirt_from_curves_round_trips_and_grades() {
         assert!(mean <= ROUND_TRIP_MEAN_MM && p95 <= ROUND_TRIP_P95_MM, "{mean} {p95}");
     }
     // graded on fixture bodies, every bar
-    let plan = block(&a.template, body, Some(&design), &GradeOptions::default()).unwrap();
+    let go = GradeOptions::default();
+    let plan = block(&a.template, body, Some(&design), &go).unwrap();
     let mut b = bars::Bars::default();
     for (name, mesh, lm) in fixture_bodies().into_iter().step_by(4) {
         let fb = derive_features(mesh, &lm, &DeriveOptions::default()).unwrap();
         let o = obstacle(&fb.mesh);
-        let g = grade_with_darts(&a.template, &fb, Some(&o), &name, &GradeOptions::default(), DartSource::Block(&plan))
+        let g = grade_with_darts(&a.template, &fb, Some(&o), &name, &go, DartSource::Block(&plan))
             .unwrap_or_else(|e| panic!("{name}: {e}"));
         b.check(&a.template, &fb, &o, &g, &name, false);
     }
     b.report();
     assert!(b.failures.is_empty(), "{:#?}", b.failures);
+}
+
+/// Issue #18 item 5: the styles drawn as curves on the reference body
+/// (`grade3d::template::drawn`): an A-line skirt and a sleeveless shift
+/// dress.
+/// * Their fixtures (`fixtures/garments/*.curves.json`, route 2's input, and
+///   `*.obj`, the sampled surface with one group a piece, route 1's) are
+///   what the code writes (`cargo xtask data garments`).
+/// * Each, authored from its OBJ, round-trips on the reference body within
+///   the bars, and has two pieces (front and back: the girths that shape a
+///   piece are lines in it, not seams).
+/// * The A-line skirt, graded on every fixture body and ASTM size with its
+///   block's darts, passes the #7/#8 bars (`common/bars.rs`), its strain
+///   held to an open ceiling ([`A_LINE_STRAIN_CEILING`]).
+#[test]
+fn drawn_styles_round_trip_and_the_a_line_skirt_grades() {
+    use grade3d::io::obj::read_obj_panels;
+    use grade3d::template::drawn;
+    let body = grade3d::template::library::reference_body().unwrap();
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/garments");
+    let (a_line, dress) = (drawn::ALineOptions::default(), drawn::ShiftDressOptions::default());
+    let styles = [
+        (
+            "a-line-skirt",
+            drawn::a_line_skirt_curves(&body, &a_line).unwrap(),
+            drawn::a_line_skirt_surface(&body, &a_line).unwrap(),
+        ),
+        (
+            "shift-dress",
+            drawn::shift_dress_curves(&body, &dress).unwrap(),
+            drawn::shift_dress_surface(&body, &dress).unwrap(),
+        ),
+    ];
+    let design = obstacle(&body.mesh);
+    let mut a_line_template = None;
+    for (name, curves, pieces) in styles {
+        let stored: Vec<grade3d::template::from_curves::CurvePanel> =
+            serde_json::from_str(&std::fs::read_to_string(root.join(format!("{name}.curves.json"))).unwrap()).unwrap();
+        assert_eq!(stored, curves, "{name}: fixtures/garments is stale: run `cargo xtask data garments`");
+        let read = read_obj_panels(&std::fs::read_to_string(root.join(format!("{name}.obj"))).unwrap()).unwrap();
+        assert_eq!(read.len(), pieces.len(), "{name}");
+        for (r, p) in read.iter().zip(&pieces) {
+            // the reader numbers a piece's vertices by first use: compare triangle by triangle
+            assert!(r.name == p.name && r.triangles.len() == p.triangles.len(), "{name} {}: stale", r.name);
+            let off = r
+                .triangles
+                .iter()
+                .zip(&p.triangles)
+                .flat_map(|(a, b)| (0..3).map(move |k| r.positions[a[k] as usize].distance(p.positions[b[k] as usize])))
+                .fold(0.0, f64::max);
+            assert!(off < 1e-8, "{name} {}: stale by {off} m", r.name);
+        }
+        let names: Vec<&str> = read.iter().map(|p| p.name.as_str()).collect();
+        assert_eq!(names, ["front", "back"], "{name}");
+        let a = author_from_garment(name, &read, &body, &drawn::garment_options())
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        eprintln!(
+            "{name}: {} nodes, {} faces, pieces {:?}, ease {:?}, unmapped {:?}",
+            a.template.nodes.len(),
+            a.template.faces.len(),
+            a.pieces,
+            a.girths,
+            a.unmapped
+        );
+        let g = grade(&a.template, &body, Some(&design), "design", &GradeOptions::default()).unwrap();
+        let graded = g.cut_mesh().unwrap();
+        let (gi, si) = (SphereIndex::new(&graded), SphereIndex::new(&a.surface));
+        let to_design =
+            mean_p95(graded.positions().iter().map(|&q| si.closest_point(&a.surface, q).distance).collect());
+        let to_graded =
+            mean_p95(a.surface.positions().iter().map(|&q| gi.closest_point(&graded, q).distance).collect());
+        eprintln!(
+            "{name}: graded → designed mean {:.2} mm, p95 {:.2} mm; designed → graded mean {:.2} mm, p95 {:.2} mm",
+            to_design.0, to_design.1, to_graded.0, to_graded.1
+        );
+        for r in &g.pattern.reports {
+            eprintln!("{name} {} on its design body: p95 strain {:.2} %", r.name, r.distortion.strain_p95 * 100.0);
+        }
+        for (mean, p95) in [to_design, to_graded] {
+            assert!(mean <= ROUND_TRIP_MEAN_MM && p95 <= ROUND_TRIP_P95_MM, "{name}: {mean} {p95}");
+        }
+        if name == "a-line-skirt" {
+            assert!(a.girths.contains_key("hip"), "{:?}", a.girths);
+            a_line_template = Some(a.template);
+        }
+    }
+    let t = a_line_template.unwrap();
+    let plan = block(&t, &body, Some(&design), &GradeOptions::default()).unwrap();
+    let mut b = bars::Bars::default();
+    b.open_templates.push((t.name.clone(), A_LINE_STRAIN_CEILING));
+    let mut failures = Vec::new();
+    for (name, mesh, lm) in fixture_bodies() {
+        let fb = derive_features(mesh, &lm, &DeriveOptions::default()).unwrap();
+        let o = obstacle(&fb.mesh);
+        match grade_with_darts(&t, &fb, Some(&o), &name, &GradeOptions::default(), DartSource::Block(&plan)) {
+            Ok(g) => b.check(&t, &fb, &o, &g, &name, false),
+            Err(e) => failures.push(format!("{name}: {e}")),
+        }
+    }
+    b.report();
+    failures.extend(b.failures);
+    assert!(failures.is_empty(), "{} failures:\n{}", failures.len(), failures.join("\n"));
 }

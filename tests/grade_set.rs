@@ -43,14 +43,16 @@ const TRUE_MOVE_MM: f64 = 10.0;
 
 #[test]
 fn an_evenly_stepped_mens_chart_grades_evenly() {
-    let all = ["straight-skirt", "trousers", "fitted-bodice"];
+    let all = ["straight-skirt", "trousers", "fitted-bodice", "a-line-skirt"];
     grade_set("mens-36-46-in.csv", "42", &all, &all);
 }
 
 #[test]
 fn an_evenly_stepped_womens_chart_with_lengths_grades_evenly_and_nests() {
-    let all = ["straight-skirt", "trousers", "fitted-bodice"];
-    grade_set("womens-34-44-cm.csv", "38", &all, &all);
+    let all = ["straight-skirt", "trousers", "fitted-bodice", "a-line-skirt"];
+    // the A-line skirt's back crosses 4 times between sizes 36 and 38 after truing (its other 9
+    // steps nest; the men's chart nests whole): measured, not yet met (issue #18)
+    grade_set("womens-34-44-cm.csv", "38", &all[..3], &all);
 }
 
 /// Grades `chart` (in `fixtures/size-charts`) from size `base` and checks the

@@ -86,6 +86,7 @@ fn patterns_on_every_body_meet_the_bars() {
     let mut by_size: BTreeMap<String, Vec<(u32, String, Vec<PatternPiece>)>> = BTreeMap::new();
     let mut pieces_total = 0usize;
     let mut misses: Vec<String> = Vec::new();
+    let mut step_misses: Vec<String> = Vec::new();
     let mut strain_misses: Vec<String> = Vec::new();
     let (mut strain_open, mut strain_open_count) = (Worst::default(), 0usize);
     let mut skirt_trouser_pieces = 0usize;
@@ -333,15 +334,12 @@ fn patterns_on_every_body_meet_the_bars() {
         let own = step_regularity_governed(&rules, template, steps_of);
         // issue #14's step bar, each axis read against its own governing measurement
         for r in &own {
-            assert!(
-                r.worst_mm <= r.allowed_mm && r.sign_changes == 0,
-                "{style} {} {}: steps vary by {:.2} mm (allowed {:.2}), {} run back",
-                r.piece,
-                r.label,
-                r.worst_mm,
-                r.allowed_mm,
-                r.sign_changes
-            );
+            if !(r.worst_mm <= r.allowed_mm && r.sign_changes == 0) {
+                step_misses.push(format!(
+                    "{style} {} {}: steps vary by {:.2} mm (allowed {:.2}), {} run back",
+                    r.piece, r.label, r.worst_mm, r.allowed_mm, r.sign_changes
+                ));
+            }
         }
         for (reading, reg) in [(format!("the {governing} steps"), &one), ("each point's own girths".into(), &own)] {
             let over = reg.iter().filter(|r| r.worst_mm > r.allowed_mm).count();
@@ -391,6 +389,12 @@ fn patterns_on_every_body_meet_the_bars() {
         mirror.0, mirror.1, mirror_line.0, mirror_line.1
     );
     eprintln!("internal lines: {internal_lines}, with a problem: {}", line_problems.len());
+    for p in &line_problems {
+        eprintln!("  {p}");
+    }
+    // issue #14's step bar (each size's step of a grade point within max(2 mm, 25 %) of the
+    // governing measurement's, never running back)
+    assert!(step_misses.is_empty(), "grade points whose steps are not regular: {step_misses:#?}");
     // issue #14's clean-lines bar: no internal line that crosses itself or leaves its piece
     assert!(line_problems.is_empty(), "internal lines that are not clean:\n{}", line_problems.join("\n"));
     // issue #14's mirror-pair bar: area, width and height within 0.5 %, sew lines within 0.5 mm

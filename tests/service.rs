@@ -288,7 +288,7 @@ fn health_readiness_metrics_and_unknown_routes() {
     let r = call("GET", &s.url("/healthz"), &[], None);
     assert_eq!((r.status, r.text().as_str()), (200, "ok"));
     let r = call("GET", &s.url("/readyz"), &[], None);
-    assert_eq!(r.json()["templates"], 3);
+    assert_eq!(r.json()["templates"], 4);
     call("GET", &s.url("/v1/templates"), &[], None);
     let r = call("GET", &s.url("/metrics"), &[], None);
     assert_eq!(r.status, 200);
@@ -309,7 +309,7 @@ fn template_library_over_http() {
     let s = Server::start(&temp_dir("templates"), &[]);
     let list = call("GET", &s.url("/v1/templates"), &[], None).json();
     let names: Vec<&str> = list.as_array().unwrap().iter().map(|e| e["name"].as_str().unwrap()).collect();
-    assert_eq!(names, ["fitted-bodice", "straight-skirt", "trousers"]);
+    assert_eq!(names, ["a-line-skirt", "fitted-bodice", "straight-skirt", "trousers"]);
     let skirt = call("GET", &s.url("/v1/templates/straight-skirt"), &[], None);
     assert_eq!(skirt.status, 200);
     assert_eq!(skirt.header("x-template-version"), Some("1"));
@@ -590,7 +590,7 @@ fn answers_validate_against_the_generated_schemas() {
     let done = wait_job(&s, r.json()["href"].as_str().unwrap());
     validate("Job", &done);
     // every built-in template document answers the contract's Template schema
-    for name in ["straight-skirt", "trousers", "fitted-bodice"] {
+    for name in ["straight-skirt", "trousers", "fitted-bodice", "a-line-skirt"] {
         let r = call("GET", &s.url(&format!("/v1/templates/{name}")), &[], None);
         assert_eq!(r.status, 200, "{name}");
         validate("Template", &r.json());
@@ -602,9 +602,12 @@ fn answers_validate_against_the_generated_schemas() {
     validate("Vocabulary", &vocab);
     let point = |id: &str| vocab["points"].as_array().unwrap().iter().find(|p| p["id"] == id).unwrap().clone();
     assert_eq!(point("hip_left")["landmark"], true);
-    assert_eq!(point("hip_left")["templates"], serde_json::json!(["straight-skirt", "trousers"]));
-    assert_eq!(point("waist_left")["templates"], serde_json::json!(["fitted-bodice", "straight-skirt", "trousers"]));
-    assert_eq!(point("knee_left")["templates"], serde_json::json!(["trousers"]));
+    assert_eq!(point("hip_left")["templates"], serde_json::json!(["a-line-skirt", "straight-skirt", "trousers"]));
+    assert_eq!(
+        point("waist_left")["templates"],
+        serde_json::json!(["a-line-skirt", "fitted-bodice", "straight-skirt", "trousers"])
+    );
+    assert_eq!(point("knee_left")["templates"], serde_json::json!(["a-line-skirt", "trousers"]));
     // every fixture's landmarks document answers the schema; an unknown ID, a missing
     // required landmark and a 2D point do not
     for body in ["male-average-asian", "female-average-caucasian"] {

@@ -4,7 +4,8 @@
 //!
 //! - `data mannequin`: `templates/mannequin/hm08.bin.gz` from the MakeHuman folder
 //! - `data templates`: the built-in garment templates on the reference body
-//! - `data garments`: MakeHuman's dense garment surfaces into `fixtures/garments`
+//! - `data garments`: MakeHuman's dense garment surfaces into `fixtures/garments`, and the
+//!   A-line skirt's curves and surface (issue #18 item 5)
 //! - `data fixtures`: `fixtures/bodies` (8 bodies) and `fixtures/astm` (12 ASTM sizes)
 
 mod makehuman;
@@ -118,6 +119,28 @@ fn run(what: DataCommand) -> Result<(), Box<dyn std::error::Error>> {
                     mesh.vertex_count(),
                     mesh.face_count()
                 );
+            }
+            // issue #18 item 5: the library's A-line skirt as drawn (route 2's curves) and as
+            // sampled (route 1's garment, one group per panel) on the reference body
+            use grade3d_core::template::drawn;
+            let body = grade3d_core::template::library::reference_body()?;
+            let (a_line, dress) = (drawn::ALineOptions::default(), drawn::ShiftDressOptions::default());
+            let styles = [
+                (
+                    "a-line-skirt",
+                    drawn::a_line_skirt_curves(&body, &a_line)?,
+                    drawn::a_line_skirt_surface(&body, &a_line)?,
+                ),
+                ("shift-dress", drawn::shift_dress_curves(&body, &dress)?, drawn::shift_dress_surface(&body, &dress)?),
+            ];
+            for (name, curves, pieces) in styles {
+                let path = dir.join(format!("{name}.curves.json"));
+                std::fs::write(&path, serde_json::to_string_pretty(&curves)? + "\n")?;
+                println!("wrote {} ({} patches)", path.display(), curves.len());
+                let path = dir.join(format!("{name}.obj"));
+                let header = format!("grade3d's {name} on its reference body (metres; `cargo xtask data garments`)");
+                std::fs::write(&path, grade3d_io::obj::write_obj_panels(&pieces, &header))?;
+                println!("wrote {} ({} pieces)", path.display(), pieces.len());
             }
         }
     }

@@ -91,6 +91,11 @@ impl From<AuthorRequestError> for Problem {
                 FromCurvesError::Samples { .. } => {
                     Problem::bad_request("invalid-options", detail).field("curves.samples")
                 }
+                FromCurvesError::Join {
+                    source: crate::template::garment_panels::PanelError::Tolerance { .. }, ..
+                } => Problem::bad_request("invalid-options", detail).field("curves.join_tolerance_mm"),
+                // the detail names the piece (an edge of three of its patches)
+                FromCurvesError::Join { .. } => Problem::unprocessable("curves-join", detail).field("panels"),
             },
         }
     }

@@ -1693,7 +1693,7 @@ mod tests {
         assert_eq!(delete(None).await.unwrap().status(), StatusCode::UNAUTHORIZED);
         assert_eq!(delete(Some("wrong")).await.unwrap().status(), StatusCode::UNAUTHORIZED);
         assert_eq!(delete(Some("k")).await.unwrap().status(), StatusCode::NO_CONTENT);
-        assert_eq!(s.0.store.list().unwrap().len(), 2);
+        assert_eq!(s.0.store.list().unwrap().len(), crate::template::library::builtin().unwrap().len() - 1);
         let _ = std::fs::remove_dir_all(dir);
     }
 }

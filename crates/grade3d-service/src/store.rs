@@ -262,7 +262,7 @@ mod tests {
         let lib = builtin().expect("library");
         let store = TemplateStore::open(&path, &lib).expect("open");
         let names: Vec<String> = store.list().unwrap().into_iter().map(|e| e.name).collect();
-        assert_eq!(names, ["fitted-bodice", "straight-skirt", "trousers"]);
+        assert_eq!(names, ["a-line-skirt", "fitted-bodice", "straight-skirt", "trousers"]);
         let (v, skirt) = store.get("straight-skirt", None).unwrap();
         assert_eq!((v, &skirt), (1, &lib[0]));
         // replace: version 2; the old version stays readable
@@ -288,6 +288,7 @@ mod tests {
         assert_eq!(
             entries,
             vec![
+                Entry { name: "a-line-skirt".into(), version: 1 },
                 Entry { name: "fitted-bodice".into(), version: 1 },
                 Entry { name: "mini-skirt".into(), version: 1 },
                 Entry { name: "straight-skirt".into(), version: 2 },

@@ -24,6 +24,16 @@
 //! different regions (the caller's labels: a garment's pieces and girth
 //! bands), or when the flip would make an edge the mesh already has.
 //!
+//! One exception to the flatness rule: an **ear on a line between
+//! regions** — a triangle `abc` whose edges `bc` and `ca` are both shared
+//! with triangles of other regions (a girth line between two bands), its
+//! angle at `c` at least [`FlipOptions::ear_angle_deg`] — is a sliver lying
+//! along that line, across the surface (the QEM contraction of seed 000
+//! §3.3 leaves one where three nodes of a curved girth line close a
+//! triangle: the authored A-line skirt's back hip). Its edge `ab` flips
+//! whatever the dihedral angle, the new triangles checked against the
+//! other triangle's normal alone.
+//!
 //! Passes run over the edges in a fixed order until one flips nothing (or
 //! [`FlipOptions::max_passes`]); a triangle flipped in a pass is not
 //! flipped again in that pass. The result is deterministic.
@@ -51,11 +61,26 @@ pub struct FlipOptions {
     pub min_gain_deg: f64,
     /// Most passes over the edges (count). Default 64.
     pub max_passes: usize,
+    /// Least angle at the middle corner of an ear on a line between
+    /// regions that flips whatever its dihedral (module docs), degrees.
+    /// Default 150.
+    pub ear_angle_deg: f64,
 }
 
 impl Default for FlipOptions {
     fn default() -> Self {
-        Self { max_dihedral_deg: 40.0, min_gain_deg: 0.5, max_passes: 64 }
+        Self { max_dihedral_deg: 40.0, min_gain_deg: 0.5, max_passes: 64, ear_angle_deg: 150.0 }
+    }
+}
+
+/// The interior angle of triangle `abc` at `c`, radians (0 when degenerate).
+fn angle_at(c: DVec3, a: DVec3, b: DVec3) -> f64 {
+    let (u, v) = (a - c, b - c);
+    let d = u.length() * v.length();
+    if d <= 0.0 || !d.is_finite() {
+        0.0
+    } else {
+        (u.dot(v) / d).clamp(-1.0, 1.0).acos()
     }
 }
 
@@ -84,6 +109,7 @@ pub fn lawson_flips(positions: &[DVec3], triangles: &mut [[u32; 3]], region: &[u
     let n = positions.len() as u32;
     let cos_dihedral = opts.max_dihedral_deg.to_radians().cos();
     let gain = opts.min_gain_deg.to_radians();
+    let ear_angle = opts.ear_angle_deg.to_radians();
     let pos = |v: u32| positions[v as usize];
     let mut flips = 0;
     for _ in 0..opts.max_passes {
@@ -120,10 +146,20 @@ pub fn lawson_flips(positions: &[DVec3], triangles: &mut [[u32; 3]], region: &[u
             }
             let (pa, pb, pc, pd) = (pos(a), pos(b), pos(c), pos(d));
             let (Some(n1), Some(n2)) = (normal(pa, pb, pc), normal(pb, pa, pd)) else { continue };
-            if n1.dot(n2) < cos_dihedral {
-                continue;
-            }
-            let mean = n1 + n2;
+            // an edge of the triangle `face` shared with a triangle of another region
+            let on_line = |p: u32, q: u32, face: usize| {
+                uses.get(&(p.min(q), p.max(q))).is_some_and(|w| {
+                    w.len() == 2 && w.iter().any(|&(h, _)| h != face && region.get(h) != region.get(face))
+                })
+            };
+            let ear_c = on_line(b, c, f) && on_line(c, a, f) && angle_at(pc, pa, pb) >= ear_angle;
+            let ear_d = on_line(a, d, g) && on_line(d, b, g) && angle_at(pd, pb, pa) >= ear_angle;
+            let mean = match (ear_c, ear_d) {
+                (true, false) => n2,
+                (false, true) => n1,
+                _ if n1.dot(n2) < cos_dihedral => continue,
+                _ => n1 + n2,
+            };
             let (Some(m1), Some(m2)) = (normal(pa, pd, pc), normal(pd, pb, pc)) else { continue };
             if m1.dot(mean) <= 0.0 || m2.dot(mean) <= 0.0 {
                 continue;
@@ -187,6 +223,43 @@ mod tests {
         let rect = [DVec3::ZERO, DVec3::new(1.0, 0.0, 0.0), DVec3::new(1.0, 0.2, 0.0), DVec3::new(0.0, 0.2, 0.0)];
         let mut r = vec![[0, 1, 2], [0, 2, 3]];
         assert_eq!(lawson_flips(&rect, &mut r, &[0, 0], &FlipOptions::default()), 0);
+    }
+
+    /// A triangle along a curved line between two regions (its corners
+    /// three points of the line, lying across the surface: 90° to its
+    /// neighbour) flips its chord into the surface; the same pair with the
+    /// line's two edges on the mesh's boundary (no other region there)
+    /// stays folded.
+    #[test]
+    fn an_ear_on_a_line_between_regions_flips_whatever_its_dihedral() {
+        // the surface: the plane z = 0 above the line y = 0 (region 0), and below it (region 1);
+        // the line runs -x → +x through c, bowed 0.2 out of the surface
+        let p = [
+            DVec3::new(-1.0, 0.0, 0.0),
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(0.0, 0.0, 0.2),
+            DVec3::new(0.0, 1.0, 0.0),
+            DVec3::new(0.0, -1.0, 0.0),
+        ];
+        // region 0: the ear (0, 1, 2) and its neighbour (1, 0, 3); region 1: below the line
+        let mut t = vec![[0, 1, 2], [1, 0, 3], [0, 2, 4], [2, 1, 4]];
+        let regions = [0, 0, 1, 1];
+        let before = normal(p[1], p[0], p[3]).unwrap();
+        assert!(angle_at(p[2], p[0], p[1]).to_degrees() > 150.0);
+        assert_eq!(lawson_flips(&p, &mut t, &regions, &FlipOptions::default()), 1);
+        let uses = edge_uses(&t);
+        assert!(uses.contains_key(&(2, 3)) && !uses.contains_key(&(0, 1)), "{t:?}");
+        // the new triangles face as the neighbour did
+        for f in &t[..2] {
+            let n = normal(p[f[0] as usize], p[f[1] as usize], p[f[2] as usize]).unwrap();
+            assert!(n.dot(before) > 0.0, "{t:?}");
+        }
+        // below 150° it stays; with no other region along its edges it stays
+        let mut t = vec![[0, 1, 2], [1, 0, 3], [0, 2, 4], [2, 1, 4]];
+        let strict = FlipOptions { ear_angle_deg: 170.0, ..FlipOptions::default() };
+        assert_eq!(lawson_flips(&p, &mut t, &regions, &strict), 0);
+        let mut alone = vec![[0, 1, 2], [1, 0, 3]];
+        assert_eq!(lawson_flips(&p, &mut alone, &[0, 0], &FlipOptions::default()), 0);
     }
 
     /// Edges between regions, boundary edges and folded pairs stay.

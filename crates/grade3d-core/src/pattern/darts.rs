@@ -43,8 +43,8 @@
 //!    [`AutoDartOptions::min_gain`].
 //!
 //! Rounds repeat until the piece meets [`AutoDartOptions::target_strain_p95`],
-//! holds [`AutoDartOptions::max_darts`] found darts (a mirrored pair
-//! counting once), or no candidate helps.
+//! holds [`AutoDartOptions::max_darts`] found darts (a mirrored pair is
+//! two: it is tried only while both fit), or no candidate helps.
 //!
 //! # Contract
 //!
@@ -79,10 +79,12 @@ pub struct AutoDartOptions {
     /// dart, and the search stops once a piece reaches it (fraction). Default 0.025.
     pub target_strain_p95: f64,
     /// Most darts added to one piece, a mirrored pair on a piece that is
-    /// its own mirror image ([`DartGuides::mirror`]) counting once: per side
-    /// (count). Default 2 (issue #14: a
-    /// pattern maker drafts one or two back darts per side, not a fan; the
-    /// search with 8 put 3–5 on a trouser back, intakes up to 77 mm).
+    /// its own mirror image ([`DartGuides::mirror`]) counting two (count).
+    /// Default 2 (issue #14: a pattern maker drafts one or two back darts
+    /// per side, not a fan; the search with 8 put 3–5 on a trouser back,
+    /// intakes up to 77 mm; a skirt back that is its own mirror image takes
+    /// one pair — a second pair on the authored A-line skirt moved its
+    /// waist's grade points by up to 22 mm from size to size).
     pub max_darts: usize,
     /// Apexes tried per dart (count; each costs one flattening). Default 24.
     pub candidates: usize,
@@ -302,12 +304,15 @@ pub fn insert_darts(
     if !opts.enabled {
         return (panel, best, found);
     }
-    let mut rounds = 0;
-    while rounds < opts.max_darts && best.distortion.strain_p95 > opts.target_strain_p95 {
-        rounds += 1;
+    while found.len() < opts.max_darts && best.distortion.strain_p95 > opts.target_strain_p95 {
         let before = best.distortion.strain_p95;
         let names = [found.len() + 1, found.len() + 2].map(|k| format!("dart_auto_{}_{k}", panel.name));
-        let paths = candidate_paths(&panel, &best.flat.uv, n_nodes, opts, guides);
+        // a mirrored pair is two darts: it must fit in what is left of the cap
+        let mut paths = candidate_paths(&panel, &best.flat.uv, n_nodes, opts, guides);
+        paths.retain(|p| found.len() + p.len() <= opts.max_darts);
+        if paths.is_empty() {
+            break;
+        }
         // a candidate that panics is skipped like one that fails: its own result, in its own
         // place, so that the others stay paired with their paths (issue #16: a panicking
         // thread's whole chunk came back empty and shifted every later result)
@@ -807,10 +812,14 @@ mod tests {
     #[test]
     fn a_symmetric_piece_gets_its_darts_in_mirrored_pairs() {
         // planted: the cap is its own mirror image across x = 0; each found dart is followed by
-        // its image (apex within an edge of the reflection), the pair counting once
+        // its image (apex within an edge of the reflection), the pair counting two toward the
+        // cap: with room for one dart, no pair is tried
         let p = panel(cap(0.3, 30.0, 24));
         let guides = DartGuides { mirror: Some((DVec3::X, 0.0)), ..Default::default() };
-        let opts = AutoDartOptions { max_darts: 1, ..AutoDartOptions::default() };
+        let one = AutoDartOptions { max_darts: 1, ..AutoDartOptions::default() };
+        let (_, _, found) = insert_darts(&p, flat(&p).unwrap(), 0, 3e-3, &one, &guides, |q, _| flat(q));
+        assert!(found.len() <= 1, "{found:?}");
+        let opts = AutoDartOptions { max_darts: 2, ..AutoDartOptions::default() };
         let (out, _, found) = insert_darts(&p, flat(&p).unwrap(), 0, 3e-3, &opts, &guides, |q, _| flat(q));
         assert_eq!(found.len(), 2, "{found:?}");
         assert_eq!(out.darts.len(), 2);

@@ -836,11 +836,13 @@ fn pattern_once(
                 && !found_darts.is_empty()
                 && (d.flipped > 0 || sew_line_self_intersects || cut_line_self_intersects || unclean() || shut())
             {
-                // one dart fewer per side: a mirrored pair on a piece that is its own mirror image
-                // is one round of the search (capped by rounds, its cap would find the same pair
-                // again), a mirror pair's second panel's darts are all mirrored
+                // the last round's darts fewer: a mirrored pair on a piece that is its own mirror
+                // image is two darts found in one round (a cap one lower would find the same pair
+                // again); a mirror pair's second panel's darts are all mirrored, one a round
                 let own = found_darts.iter().filter(|f| f.origin == DartOrigin::Found).count();
-                cap[i] = if own == 0 { found_darts.len() } else { own } - 1;
+                let last_round =
+                    if own > 0 && found_darts.last().is_some_and(|f| f.origin == DartOrigin::Mirrored) { 2 } else { 1 };
+                cap[i] = found_darts.len().saturating_sub(last_round);
                 // a mirrored panel's darts are its pair's: the pair gives one up
                 if let Some(j) = second_of[i] {
                     cap[j] = cap[j].min(cap[i]);

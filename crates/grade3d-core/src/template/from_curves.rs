@@ -18,15 +18,25 @@
 //!    — to rounding, which the weld of [`super::garment_panels::weld_panels`]
 //!    absorbs — and are sewn there by the seam finding of step 1 of
 //!    authoring.
-//! 3. Each piece is turned to face away from the centroid of all the
-//!    pieces' points (a garment goes round its body), so that the welded
+//! 3. Each patch is turned to face away from the centroid of all the
+//!    patches' points (a garment goes round its body), so that the welded
 //!    garment is consistently oriented whatever order each panel's curves
 //!    were drawn in.
+//! 4. Patches that name the same [`CurvePanel::piece`] are one pattern
+//!    piece: seed 001 §3.2's sub-patches, case (d) of its Fig. 5 — a
+//!    curve across two opposite sides of a region splits it into two
+//!    4-sided patches that stay one surface. They are joined where they
+//!    share points (within [`CurvesOptions::join_tolerance_mm`], the
+//!    weld of [`super::garment_panels::weld_panels`]), so the curve
+//!    between them is a line inside the piece (a skirt's hip line), not a
+//!    seam. A piece is named by its first patch's `piece`, in the order
+//!    its first patch comes. A piece's vertices are numbered by their first
+//!    use in its triangles (as an OBJ reader numbers them).
 //!
-//! Seed 001 §3.2's refinement by interior curves is not done: a panel
-//! whose four sides do not carry its shape (a skirt from waist to hem
-//! round the seat) is given as several panels, cut at the curves that
-//! shape it (the hip), as a pattern maker's block is.
+//! Seed 001 §3.2's strokes that end inside a patch (projected onto the
+//! base surface and extended to its boundary) are not taken: a caller
+//! draws a curve that shapes a piece (the hip girth eased) from side to
+//! side, and the sub-patches of step 4 interpolate it exactly.
 //!
 //! # Failure modes
 //!
@@ -38,7 +48,7 @@
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
-use super::garment_panels::PanelMesh;
+use super::garment_panels::{weld_panels, PanelError, PanelMesh, WeldOptions};
 use crate::geom::coons::{CoonsError, CoonsOptions, CoonsPatch};
 
 /// One panel as its four boundary curves (module docs), metres.
@@ -55,6 +65,12 @@ pub struct CurvePanel {
     pub left: Vec<[f64; 3]>,
     /// The right curve, from the bottom up.
     pub right: Vec<[f64; 3]>,
+    /// The pattern piece this patch is part of: patches naming the same
+    /// piece are joined where they share a curve, which is then a line
+    /// inside the piece, not a seam (module docs, step 4); absent: a piece
+    /// of its own, named `name`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub piece: Option<String>,
 }
 
 /// Knobs of [`panels_from_curves`]; each documents its default and unit.
@@ -66,11 +82,15 @@ pub struct CurvesOptions {
     /// Intervals of every patch's sampling along each parameter (count).
     /// Default 24.
     pub samples: usize,
+    /// Points of two patches of one piece closer than this are one point,
+    /// mm. Default 0.01 (a shared curve samples to the same points, to
+    /// rounding).
+    pub join_tolerance_mm: f64,
 }
 
 impl Default for CurvesOptions {
     fn default() -> Self {
-        Self { coons: CoonsOptions::default(), samples: 24 }
+        Self { coons: CoonsOptions::default(), samples: 24, join_tolerance_mm: 0.01 }
     }
 }
 
@@ -97,6 +117,15 @@ pub enum FromCurvesError {
         /// What was asked.
         samples: usize,
     },
+    /// The patches of a piece could not be joined (a tolerance that is not
+    /// positive and finite; an edge of three patches).
+    #[error("piece `{piece}`: {source}")]
+    Join {
+        /// The piece.
+        piece: String,
+        /// Why.
+        source: PanelError,
+    },
 }
 
 fn points(p: &[[f64; 3]]) -> Vec<DVec3> {
@@ -115,19 +144,19 @@ pub fn panels_from_curves(panels: &[CurvePanel], opts: &CurvesOptions) -> Result
     if opts.samples == 0 || opts.samples > MAX_SAMPLES {
         return Err(FromCurvesError::Samples { samples: opts.samples });
     }
-    let mut pieces = Vec::with_capacity(panels.len());
+    let mut patches = Vec::with_capacity(panels.len());
     for p in panels {
         let patch = |e| FromCurvesError::Patch { panel: p.name.clone(), source: e };
         let coons =
             CoonsPatch::new(&points(&p.bottom), &points(&p.top), &points(&p.left), &points(&p.right), &opts.coons)
                 .map_err(patch)?;
         let (positions, triangles) = coons.sample(opts.samples, opts.samples).map_err(patch)?;
-        pieces.push(PanelMesh { name: p.name.clone(), positions, triangles });
+        patches.push(PanelMesh { name: p.name.clone(), positions, triangles });
     }
-    // every piece faces away from the centroid of all their points
-    let all: Vec<DVec3> = pieces.iter().flat_map(|p| p.positions.iter().copied()).collect();
+    // every patch faces away from the centroid of all their points
+    let all: Vec<DVec3> = patches.iter().flat_map(|p| p.positions.iter().copied()).collect();
     let centre = all.iter().copied().sum::<DVec3>() / all.len().max(1) as f64;
-    for piece in &mut pieces {
+    for piece in &mut patches {
         let outward: f64 = piece
             .triangles
             .iter()
@@ -142,7 +171,56 @@ pub fn panels_from_curves(panels: &[CurvePanel], opts: &CurvesOptions) -> Result
             }
         }
     }
-    Ok(pieces)
+    // the patches of one piece joined into it (step 4)
+    let mut order: Vec<String> = Vec::new();
+    let mut members: Vec<Vec<PanelMesh>> = Vec::new();
+    for (p, mesh) in panels.iter().zip(patches) {
+        let piece = p.piece.clone().unwrap_or_else(|| p.name.clone());
+        match order.iter().position(|o| *o == piece) {
+            Some(i) => members[i].push(mesh),
+            None => {
+                order.push(piece);
+                members.push(vec![mesh]);
+            }
+        }
+    }
+    let weld = WeldOptions { tolerance_mm: opts.join_tolerance_mm };
+    let mut pieces = Vec::with_capacity(order.len());
+    for (name, mut parts) in order.into_iter().zip(members) {
+        if parts.len() == 1 {
+            let mut only = parts.remove(0);
+            only.name = name;
+            pieces.push(only);
+            continue;
+        }
+        let joined =
+            weld_panels(&parts, &weld).map_err(|source| FromCurvesError::Join { piece: name.clone(), source })?;
+        pieces.push(PanelMesh { name, positions: joined.positions, triangles: joined.triangles });
+    }
+    Ok(pieces.into_iter().map(by_first_use).collect())
+}
+
+/// `piece` with its vertices numbered by their first use in its triangles
+/// (as an OBJ reader numbers them: the pieces written and read back are the
+/// same to the written precision, and author alike).
+fn by_first_use(piece: PanelMesh) -> PanelMesh {
+    let mut new_of = vec![u32::MAX; piece.positions.len()];
+    let mut positions = Vec::with_capacity(piece.positions.len());
+    let triangles = piece
+        .triangles
+        .iter()
+        .map(|t| {
+            t.map(|v| {
+                let slot = &mut new_of[v as usize];
+                if *slot == u32::MAX {
+                    *slot = positions.len() as u32;
+                    positions.push(piece.positions[v as usize]);
+                }
+                *slot
+            })
+        })
+        .collect();
+    PanelMesh { name: piece.name, positions, triangles }
 }
 
 #[cfg(test)]
@@ -169,6 +247,7 @@ mod tests {
             top: arc(0.5),
             left: line(from),
             right: line(from + std::f64::consts::PI),
+            piece: None,
         };
         if flip {
             // the same panel drawn mirrored: left and right swapped, bottom and top reversed
@@ -178,6 +257,7 @@ mod tests {
                 top: p.top.into_iter().rev().collect(),
                 left: p.right,
                 right: p.left,
+                piece: None,
             };
         }
         p
@@ -211,6 +291,57 @@ mod tests {
         assert_eq!(b.len(), 50);
         for p in &a {
             assert!(b.iter().any(|q| q.distance(*p) < 1e-12), "{p}");
+        }
+    }
+
+    /// A half-cylinder drawn as two patches stacked at y = 0.25 with
+    /// `piece` "front", and a back as one patch: two pieces; the front's
+    /// 25 × 49 grid of points once each (the shared row joined), the shared
+    /// row inside the piece (every edge along it in two triangles), every
+    /// point on the cylinder; a join tolerance of 0 is named with the piece.
+    #[test]
+    fn patches_of_one_piece_are_joined_at_their_shared_curve() {
+        let cut = |p: &CurvePanel, y0: f64, y1: f64, name: &str| {
+            let at = |q: &[[f64; 3]], y: f64| q.iter().map(|r| [r[0], y, r[2]]).collect::<Vec<_>>();
+            let side = |q: &[[f64; 3]]| vec![[q[0][0], y0, q[0][2]], [q[0][0], y1, q[0][2]]];
+            CurvePanel {
+                name: name.into(),
+                bottom: at(&p.bottom, y0),
+                top: at(&p.top, y1),
+                left: side(&p.left),
+                right: side(&p.right),
+                piece: Some("front".into()),
+            }
+        };
+        let whole = half("front", 0.0, false);
+        let panels = [
+            cut(&whole, 0.0, 0.25, "front-lower"),
+            half("back", std::f64::consts::PI, true),
+            cut(&whole, 0.25, 0.5, "front-upper"),
+        ];
+        let pieces = panels_from_curves(&panels, &CurvesOptions::default()).unwrap();
+        let names: Vec<&str> = pieces.iter().map(|p| p.name.as_str()).collect();
+        assert_eq!(names, ["front", "back"]);
+        let front = &pieces[0];
+        assert_eq!((front.positions.len(), front.triangles.len()), (25 * 49, 2 * 1152));
+        for p in &front.positions {
+            assert!(((p.x * p.x + p.z * p.z).sqrt() - 0.2).abs() < 2e-3, "{p}");
+        }
+        let mut uses: std::collections::BTreeMap<(u32, u32), usize> = Default::default();
+        for t in &front.triangles {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                *uses.entry((a.min(b), a.max(b))).or_default() += 1;
+            }
+        }
+        let on_row = |v: u32| (front.positions[v as usize].y - 0.25).abs() < 1e-12;
+        let row: Vec<usize> = uses.iter().filter(|((a, b), _)| on_row(*a) && on_row(*b)).map(|(_, &n)| n).collect();
+        assert_eq!(row.len(), 24, "the shared row's edges");
+        assert!(row.iter().all(|&n| n == 2), "the shared row is inside the piece: {row:?}");
+        let opts = CurvesOptions { join_tolerance_mm: 0.0, ..Default::default() };
+        match panels_from_curves(&panels, &opts) {
+            Err(FromCurvesError::Join { piece, .. }) => assert_eq!(piece, "front"),
+            other => panic!("{other:?}"),
         }
     }
 

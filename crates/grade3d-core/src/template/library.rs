@@ -36,6 +36,7 @@ const BUILTIN: &[(&str, &str)] = &[
     ("straight-skirt", include_str!("../../../../templates/garments/straight-skirt.json")),
     ("trousers", include_str!("../../../../templates/garments/trousers.json")),
     ("fitted-bodice", include_str!("../../../../templates/garments/fitted-bodice.json")),
+    ("a-line-skirt", include_str!("../../../../templates/garments/a-line-skirt.json")),
 ];
 
 /// Loads and validates every built-in template.
@@ -61,6 +62,12 @@ pub enum AuthorError {
     /// Encoding failed.
     #[error(transparent)]
     Codec(#[from] CodecError),
+    /// A style drawn as curves (issue #18 item 2) could not be sampled.
+    #[error(transparent)]
+    Curves(#[from] super::from_curves::FromCurvesError),
+    /// A style authored from its garment (issue #18 item 1) could not be.
+    #[error(transparent)]
+    Garment(#[from] Box<super::from_garment::FromGarmentError>),
 }
 
 /// The reference body templates are authored on.
@@ -820,5 +827,6 @@ pub fn author_all() -> Result<Vec<Template>, AuthorError> {
         straight_skirt(&body, &SkirtOptions::default())?,
         trousers(&body, &TrouserOptions::default())?,
         fitted_bodice(&body, &BodiceOptions::default())?,
+        super::drawn::a_line_skirt(&body, &super::drawn::ALineOptions::default())?,
     ])
 }

@@ -1,0 +1,559 @@
+//! Built-in styles drawn as curves on a body (issue #18 item 5): the
+//! library grows through the routes a user has — each style is drawn as
+//! 3D boundary curves (route 2, [`super::from_curves`]), sampled into its
+//! garment surface and authored from that surface (route 1,
+//! [`super::from_garment::author_from_garment`]). `cargo xtask data
+//! garments` writes the curves and surfaces into `fixtures/garments/`.
+//!
+//! # Method
+//!
+//! * **Eased rings.** A girth is bridged as a tape bridges it and offset
+//!   radially within its plane by the offset that adds the declared ease
+//!   to its tape length ([`girth::bridged`], [`girth::ring_radial`]: as
+//!   decoding places ring nodes). A ring is sampled by casting rays from
+//!   its centre within the plane normal to the body's up axis at angle
+//!   `a` (0 towards the body's left, `+x`; π/2 to its front, `+z`).
+//! * **Side seams** run at the angles of each girth's side feature points
+//!   (left near 0, right near π), straight between consecutive rings.
+//! * **Hems** drop from the eased hip along the hip plane's normal and
+//!   flare outwards within it, as a [`super::format::Drop`] places a node
+//!   ([`drop_position`]).
+//! * **Pieces** are several Coons patches joined where they share curves
+//!   (seed 001 §3.2's sub-patches, [`super::from_curves`] step 4): the
+//!   girths that shape a piece are lines within it, not seams.
+//! * **Held off the body** ([`hold_off`]): where a patch's interpolation
+//!   between its curves passes closer to the body than a clearance (a
+//!   shift dress's upper chest, between the chest line and the neckline),
+//!   the point is moved out to that clearance along the body's normal
+//!   there, as a designer's drape lies on the form.
+//!
+//! # Failure modes
+//!
+//! [`AuthorError::Missing`] naming the girth or point the body lacks;
+//! [`AuthorError::Curves`] and [`AuthorError::Garment`] from the routes.
+
+use std::f64::consts::{PI, TAU};
+
+use glam::{DVec2, DVec3};
+use serde::{Deserialize, Serialize};
+
+use super::codec::{drop_axis, drop_position};
+use super::format::Template;
+use super::from_curves::{panels_from_curves, CurvePanel, CurvesOptions};
+use super::from_garment::{author_from_garment, DesignBody, GarmentOptions, TubeCut};
+use super::garment_panels::PanelMesh;
+use super::girth;
+use super::library::AuthorError;
+use crate::body::feature::FeatureBody;
+use crate::body::vocab::{CurveId, PointId};
+use crate::geom::query::SphereIndex;
+use crate::geom::winding::{WindingOptions, WindingTree};
+
+const MM: f64 = 1e-3;
+
+/// Bisections of [`Drawing::column_angle`] (count): the angle to 2⁻⁴⁰ of its bracket.
+const COLUMN_BISECTIONS: usize = 40;
+
+/// The frame curves are drawn in on one body.
+struct Drawing<'a> {
+    body: &'a FeatureBody,
+    /// The hip plane's normal, up the body.
+    up: DVec3,
+    /// Towards the body's left, ⟂ `up`.
+    x_dir: DVec3,
+    /// Towards its front, ⟂ `up`.
+    z_dir: DVec3,
+}
+
+/// A girth eased: its points and their centre.
+struct Ring {
+    points: Vec<DVec3>,
+    centre: DVec3,
+}
+
+impl<'a> Drawing<'a> {
+    fn new(body: &'a FeatureBody) -> Result<Self, AuthorError> {
+        let up = drop_axis(body, CurveId::Hip).ok_or_else(|| missing("hip"))?;
+        let x_dir = (DVec3::X - up * DVec3::X.dot(up)).normalize();
+        let z = up.cross(x_dir);
+        let z_dir = if z.z >= 0.0 { z } else { -z };
+        Ok(Self { body, up, x_dir, z_dir })
+    }
+
+    /// `curve` bridged and eased by `ease_mm` within its plane (module docs).
+    fn ring(&self, curve: CurveId, ease_mm: f64) -> Result<Ring, AuthorError> {
+        let c = self.body.curves.get(&curve).ok_or_else(|| missing(curve.as_str()))?;
+        let plane = girth::girth_plane(self.body, curve).ok_or_else(|| missing(curve.as_str()))?;
+        let loop_ = girth::bridged(&c.polyline, &plane);
+        let r = girth::ring_radial(&loop_, &plane, ease_mm * MM);
+        let cum = loop_.cumulative();
+        let points: Vec<DVec3> =
+            cum[..loop_.points.len()].iter().map(|&s| girth::eased(&loop_, s, r, &plane)).collect();
+        if points.len() < 3 {
+            return Err(missing(curve.as_str()));
+        }
+        let centre = points.iter().sum::<DVec3>() / points.len() as f64;
+        Ok(Ring { points, centre })
+    }
+
+    fn flat(&self, p: DVec3, centre: DVec3) -> DVec2 {
+        DVec2::new((p - centre).dot(self.x_dir), (p - centre).dot(self.z_dir))
+    }
+
+    /// Where the ray from the ring's centre at angle `a` leaves it (the
+    /// farthest crossing; the centre if none).
+    fn cast(&self, ring: &Ring, a: f64) -> DVec3 {
+        let dir = DVec2::new(a.cos(), a.sin());
+        let n = ring.points.len();
+        let mut best: Option<(f64, DVec3)> = None;
+        for i in 0..n {
+            let (p, q) = (ring.points[i], ring.points[(i + 1) % n]);
+            let (o, e) = (self.flat(p, ring.centre), self.flat(q, ring.centre) - self.flat(p, ring.centre));
+            let den = dir.perp_dot(e);
+            if den.abs() <= f64::EPSILON {
+                continue;
+            }
+            let t = o.perp_dot(e) / den;
+            let w = o.perp_dot(dir) / den;
+            if t > 0.0 && (0.0..=1.0).contains(&w) && best.is_none_or(|(bt, _)| t > bt) {
+                best = Some((t, p.lerp(q, w)));
+            }
+        }
+        best.map_or(ring.centre, |(_, x)| x)
+    }
+
+    /// The angle of `p` round `centre`, in [0, 2π).
+    fn angle(&self, p: DVec3, centre: DVec3) -> f64 {
+        let f = self.flat(p, centre);
+        f.y.atan2(f.x).rem_euclid(TAU)
+    }
+
+    fn point(&self, id: PointId) -> Result<DVec3, AuthorError> {
+        self.body.points.get(&id).map(|p| p.position).ok_or_else(|| missing(id.as_str()))
+    }
+
+    /// The side seams' angles on `ring`: those of its girth's side points,
+    /// the left one in (−π, π], the right in [0, 2π).
+    fn sides(&self, ring: &Ring, left: PointId, right: PointId) -> Result<(f64, f64), AuthorError> {
+        let l = self.angle(self.point(left)?, ring.centre);
+        Ok((if l > PI { l - TAU } else { l }, self.angle(self.point(right)?, ring.centre)))
+    }
+
+    /// The angle in `[a0, a1]` where `ring` crosses the plane `x·x_dir = x`
+    /// (bisection: the ring's lateral position runs monotonically between
+    /// a side and the centre line).
+    fn column_angle(&self, ring: &Ring, a0: f64, a1: f64, x: f64) -> f64 {
+        let f = |a: f64| self.cast(ring, a).dot(self.x_dir) - x;
+        let (mut lo, mut hi) = (a0, a1);
+        let below = f(lo) < 0.0;
+        for _ in 0..COLUMN_BISECTIONS {
+            let mid = 0.5 * (lo + hi);
+            if (f(mid) < 0.0) == below {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        0.5 * (lo + hi)
+    }
+}
+
+fn missing(what: &str) -> AuthorError {
+    AuthorError::Missing(what.to_owned())
+}
+
+/// `n ≥ 2` points of `f` from angle `a0` to `a1`.
+fn arc(f: &dyn Fn(f64) -> DVec3, a0: f64, a1: f64, n: usize) -> Vec<[f64; 3]> {
+    let n = n.max(2);
+    (0..n).map(|k| f(a0 + (a1 - a0) * k as f64 / (n - 1) as f64).to_array()).collect()
+}
+
+fn seg(p: DVec3, q: DVec3) -> Vec<[f64; 3]> {
+    vec![p.to_array(), q.to_array()]
+}
+
+/// Knobs of the A-line skirt ([`a_line_skirt_curves`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ALineOptions {
+    /// Waist ease, mm. Default 20 (the skirt ends at the waist: its edge
+    /// lies on the waist girth, where less left the ASTM bodies' waists
+    /// through the garment).
+    pub waist_ease_mm: f64,
+    /// Hip ease, mm. Default 40.
+    pub hip_ease_mm: f64,
+    /// Hem below the hip line, m. Default 0.40.
+    pub length_below_hip_m: f64,
+    /// Outward flare of the hem beyond the eased hip, within the hip's
+    /// plane, mm: the A of the A-line (a hem sweep about `2π·flare` over
+    /// the eased hip). Default 100.
+    pub hem_flare_mm: f64,
+    /// Points on each drawn waist, hip and hem arc (count). Default 49.
+    pub arc_points: usize,
+    /// Sampling of the curves' Coons patches.
+    pub curves: CurvesOptions,
+}
+
+impl Default for ALineOptions {
+    fn default() -> Self {
+        Self {
+            waist_ease_mm: 20.0,
+            hip_ease_mm: 40.0,
+            length_below_hip_m: 0.40,
+            hem_flare_mm: 100.0,
+            arc_points: 49,
+            curves: CurvesOptions::default(),
+        }
+    }
+}
+
+/// The A-line skirt drawn as curves: the eased waist and hip, a hem
+/// dropped `length_below_hip_m` from the eased hip and flared by
+/// `hem_flare_mm` (module docs). Two pieces, front and back, each two
+/// patches joined at the hip curve.
+///
+/// # Errors
+/// [`AuthorError::Missing`]: the waist or hip girth, their side points,
+/// or the points the drop axis needs.
+pub fn a_line_skirt_curves(body: &FeatureBody, o: &ALineOptions) -> Result<Vec<CurvePanel>, AuthorError> {
+    let d = Drawing::new(body)?;
+    let waist = d.ring(CurveId::Waist, o.waist_ease_mm)?;
+    let hip = d.ring(CurveId::Hip, o.hip_ease_mm)?;
+    let (wl, wr) = d.sides(&waist, PointId::WaistLeft, PointId::WaistRight)?;
+    let (hl, hr) = d.sides(&hip, PointId::HipLeft, PointId::HipRight)?;
+    let n = o.arc_points;
+    let on_waist = |a: f64| d.cast(&waist, a);
+    let on_hip = |a: f64| d.cast(&hip, a);
+    let on_hem = |a: f64| drop_position(on_hip(a), d.up, hip.centre, o.length_below_hip_m, o.hem_flare_mm * MM);
+    let mut panels = Vec::new();
+    // front: from the left side round the front to the right; back: from the right round the back to the left
+    for (piece, (w0, w1), (h0, h1)) in [("front", (wl, wr), (hl, hr)), ("back", (wr, wl + TAU), (hr, hl + TAU))] {
+        panels.push(CurvePanel {
+            name: format!("{piece}-waist-to-hip"),
+            bottom: arc(&on_hip, h0, h1, n),
+            top: arc(&on_waist, w0, w1, n),
+            left: seg(on_hip(h0), on_waist(w0)),
+            right: seg(on_hip(h1), on_waist(w1)),
+            piece: Some(piece.to_owned()),
+        });
+        panels.push(CurvePanel {
+            name: format!("{piece}-hip-to-hem"),
+            bottom: arc(&on_hem, h0, h1, n),
+            top: arc(&on_hip, h0, h1, n),
+            left: seg(on_hem(h0), on_hip(h0)),
+            right: seg(on_hem(h1), on_hip(h1)),
+            piece: Some(piece.to_owned()),
+        });
+    }
+    Ok(panels)
+}
+
+/// The A-line skirt's garment surface: [`a_line_skirt_curves`] sampled,
+/// one mesh per piece (what `fixtures/garments/a-line-skirt.obj` holds,
+/// route 1's input).
+///
+/// # Errors
+/// [`a_line_skirt_curves`]'s; [`AuthorError::Curves`].
+pub fn a_line_skirt_surface(body: &FeatureBody, o: &ALineOptions) -> Result<Vec<PanelMesh>, AuthorError> {
+    Ok(panels_from_curves(&a_line_skirt_curves(body, o)?, &o.curves)?)
+}
+
+/// The authoring options of the drawn styles: their pieces are discs
+/// already (no cut), and drawn symmetric about the body's mid-sagittal
+/// plane, their nodes are chosen so
+/// ([`GarmentOptions::symmetric_nodes_mm`] 1 mm).
+pub fn garment_options() -> GarmentOptions {
+    GarmentOptions { cut: TubeCut::None, symmetric_nodes_mm: 1.0, ..GarmentOptions::default() }
+}
+
+/// Authors the A-line skirt on `body` from its surface: nodes, seams,
+/// rings and hangs found as for any garment a user brings; its darts
+/// drafted by the pattern maker's rules (`guided_darts`).
+///
+/// # Errors
+/// [`a_line_skirt_surface`]'s; [`AuthorError::Garment`].
+pub fn a_line_skirt(body: &FeatureBody, o: &ALineOptions) -> Result<Template, AuthorError> {
+    let pieces = a_line_skirt_surface(body, o)?;
+    let mut t = author_from_garment("a-line-skirt", &pieces, body, &garment_options()).map_err(Box::new)?.template;
+    t.description = "A-line skirt: waist, hip and a hem flared from the hip, front and back; drawn as curves \
+                     and authored from their surface (issue #18, routes 2 and 1)."
+        .into();
+    t.design_body = Some(DesignBody::Reference);
+    Ok(t)
+}
+
+/// Knobs of the shift dress ([`shift_dress_curves`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ShiftDressOptions {
+    /// Neckline ease over the neck base girth, mm. Default 60.
+    pub neck_ease_mm: f64,
+    /// Chest ease (at armpit level), mm. Default 80.
+    pub chest_ease_mm: f64,
+    /// Bust ease, mm. Default 80.
+    pub bust_ease_mm: f64,
+    /// Waist ease, mm: a shift is not shaped at the waist. Default 150.
+    pub waist_ease_mm: f64,
+    /// Hip ease, mm. Default 60.
+    pub hip_ease_mm: f64,
+    /// Hem below the hip line, m. Default 0.30.
+    pub length_below_hip_m: f64,
+    /// Outward flare of the hem beyond the eased hip, mm. Default 40.
+    pub hem_flare_mm: f64,
+    /// The shoulder seam over the body's shoulder line, mm. Default 6.
+    pub shoulder_lift_mm: f64,
+    /// The least distance of the surface from the body ([`hold_off`]), mm.
+    /// Default 4.
+    pub clearance_mm: f64,
+    /// Points on each drawn arc (count). Default 25.
+    pub arc_points: usize,
+    /// Sampling of the curves' Coons patches.
+    pub curves: CurvesOptions,
+}
+
+impl Default for ShiftDressOptions {
+    fn default() -> Self {
+        Self {
+            neck_ease_mm: 60.0,
+            chest_ease_mm: 80.0,
+            bust_ease_mm: 80.0,
+            waist_ease_mm: 150.0,
+            hip_ease_mm: 60.0,
+            length_below_hip_m: 0.30,
+            hem_flare_mm: 40.0,
+            shoulder_lift_mm: 6.0,
+            clearance_mm: 4.0,
+            arc_points: 25,
+            curves: CurvesOptions { samples: 12, ..CurvesOptions::default() },
+        }
+    }
+}
+
+/// The sleeveless shift dress drawn as curves: a jewel neckline on the
+/// eased neck base, shoulder seams over the shoulder lines, armholes
+/// along the body's armscyes from the eased chest's side points to the
+/// shoulder points, the eased chest, bust, waist and hip, and a hem
+/// dropped from the hip. Two pieces, front and back, each in three
+/// columns split at the side neck points' lateral planes (so the shoulder
+/// seams and the neckline are whole sides of patches) and in bands
+/// between the girths: shoulder–chest, chest–bust, bust–waist, waist–hip,
+/// hip–hem. Seams: the shoulders and the sides.
+///
+/// # Errors
+/// [`AuthorError::Missing`]: a girth, side point, neck or shoulder point,
+/// shoulder line or armscye the body lacks.
+pub fn shift_dress_curves(body: &FeatureBody, o: &ShiftDressOptions) -> Result<Vec<CurvePanel>, AuthorError> {
+    let d = Drawing::new(body)?;
+    let n = o.arc_points;
+    let neck = d.ring(CurveId::NeckBase, o.neck_ease_mm)?;
+    // the girths from the chest down, each with its side points' angles
+    let girths = [
+        (CurveId::Chest, o.chest_ease_mm, PointId::UnderarmLeft, PointId::UnderarmRight),
+        (CurveId::Bust, o.bust_ease_mm, PointId::BustLeft, PointId::BustRight),
+        (CurveId::Waist, o.waist_ease_mm, PointId::WaistLeft, PointId::WaistRight),
+        (CurveId::Hip, o.hip_ease_mm, PointId::HipLeft, PointId::HipRight),
+    ];
+    let mut rings = Vec::new();
+    for (curve, ease, l, r) in girths {
+        let ring = d.ring(curve, ease)?;
+        let sides = d.sides(&ring, l, r)?;
+        rings.push((ring, sides));
+    }
+    let hip_centre = rings[3].0.centre;
+    // the columns' planes: the side neck points' lateral positions on the eased neck
+    let (nl, nr) = d.sides(&neck, PointId::NeckLeft, PointId::NeckRight)?;
+    let neck_left = d.cast(&neck, nl);
+    let neck_right = d.cast(&neck, nr);
+    let (xl, xr) = (neck_left.dot(d.x_dir), neck_right.dot(d.x_dir));
+    // per ring: its five angles round the front (left side, left column, right column, right side) and
+    // the back (right side, right column, left column, left side + 2π)
+    struct Level<'r> {
+        ring: &'r Ring,
+        front: [f64; 4],
+        back: [f64; 4],
+        /// Dropped from the hip (the hem): `from` the hip ring's points.
+        hem: bool,
+    }
+    let mut levels: Vec<Level> = rings
+        .iter()
+        .map(|(ring, (l, r))| Level {
+            ring,
+            front: [*l, d.column_angle(ring, *l, PI / 2.0, xl), d.column_angle(ring, PI / 2.0, *r, xr), *r],
+            back: [*r, d.column_angle(ring, *r, 1.5 * PI, xr), d.column_angle(ring, 1.5 * PI, *l + TAU, xl), *l + TAU],
+            hem: false,
+        })
+        .collect();
+    let hip = levels[3].ring;
+    levels.push(Level { ring: hip, front: levels[3].front, back: levels[3].back, hem: true });
+    let at = |lv: &Level, a: f64| {
+        let p = d.cast(lv.ring, a);
+        if lv.hem {
+            drop_position(p, d.up, hip_centre, o.length_below_hip_m, o.hem_flare_mm * MM)
+        } else {
+            p
+        }
+    };
+    // shoulder seams: the body's shoulder line lifted, from the neck's side point to the shoulder point
+    let shoulder = |line: CurveId, neck_end: DVec3| -> Result<(Vec<[f64; 3]>, DVec3), AuthorError> {
+        let c = body.curves.get(&line).ok_or_else(|| missing(line.as_str()))?;
+        let mut pts: Vec<DVec3> = c.polyline.points.iter().map(|p| *p + d.up * o.shoulder_lift_mm * MM).collect();
+        if pts.len() < 2 {
+            return Err(missing(line.as_str()));
+        }
+        if pts[0].distance(neck_end) > pts[pts.len() - 1].distance(neck_end) {
+            pts.reverse();
+        }
+        pts[0] = neck_end;
+        let end = pts[pts.len() - 1];
+        Ok((pts.iter().map(|p| p.to_array()).collect(), end))
+    };
+    let (seam_l, shoulder_l) = shoulder(CurveId::ShoulderLineLeft, neck_left)?;
+    let (seam_r, shoulder_r) = shoulder(CurveId::ShoulderLineRight, neck_right)?;
+    // an armhole: the armscye's half on the `front` (or back) side, from its lowest point to the
+    // shoulder point, moved so that it runs from `from` (the eased chest's side) to `to`
+    let armhole = |curve: CurveId, front: bool, from: DVec3, to: DVec3| -> Result<Vec<[f64; 3]>, AuthorError> {
+        let c = body.curves.get(&curve).ok_or_else(|| missing(curve.as_str()))?;
+        let pts = &c.polyline.points;
+        let m = pts.len();
+        if m < 4 {
+            return Err(missing(curve.as_str()));
+        }
+        let low = (0..m).min_by(|&i, &j| pts[i].dot(d.up).total_cmp(&pts[j].dot(d.up))).unwrap_or(0);
+        let high = (0..m).max_by(|&i, &j| pts[i].dot(d.up).total_cmp(&pts[j].dot(d.up))).unwrap_or(0);
+        // the two ways round from low to high; take the one on the asked side
+        let way = |step: usize| -> Vec<DVec3> {
+            let mut out = vec![pts[low]];
+            let mut i = low;
+            while i != high {
+                i = (i + step) % m;
+                out.push(pts[i]);
+            }
+            out
+        };
+        let (a, b) = (way(1), way(m - 1));
+        let depth = |w: &[DVec3]| w.iter().map(|p| p.dot(d.z_dir)).sum::<f64>() / w.len() as f64;
+        let half = if (depth(&a) > depth(&b)) == front { a } else { b };
+        let total: f64 = half.windows(2).map(|w| w[0].distance(w[1])).sum::<f64>().max(f64::EPSILON);
+        let (d0, d1) = (from - half[0], to - half[half.len() - 1]);
+        let mut s = 0.0;
+        let mut out = Vec::with_capacity(half.len());
+        for (k, p) in half.iter().enumerate() {
+            if k > 0 {
+                s += half[k - 1].distance(*p);
+            }
+            let t = s / total;
+            out.push((*p + d0 * (1.0 - t) + d1 * t).to_array());
+        }
+        Ok(out)
+    };
+    let chest = &levels[0];
+    let mut panels = Vec::new();
+    for (piece, angles) in [("front", chest.front), ("back", chest.back)] {
+        let front = piece == "front";
+        // the chest line's four column points, and the top of each column line
+        let c: Vec<DVec3> = angles.iter().map(|&a| at(chest, a)).collect();
+        let (side0, side1) = if front { (shoulder_l, shoulder_r) } else { (shoulder_r, shoulder_l) };
+        let (n0, n1) = if front { (neck_left, neck_right) } else { (neck_right, neck_left) };
+        let (seam0, seam1) = if front { (&seam_l, &seam_r) } else { (&seam_r, &seam_l) };
+        let (arm0, arm1) = if front {
+            (armhole(CurveId::ArmscyeLeft, true, c[0], side0)?, armhole(CurveId::ArmscyeRight, true, c[3], side1)?)
+        } else {
+            (armhole(CurveId::ArmscyeRight, false, c[0], side0)?, armhole(CurveId::ArmscyeLeft, false, c[3], side1)?)
+        };
+        let neck_arc = {
+            let (a0, a1) = if front { (nl, nr) } else { (nr, nl + TAU) };
+            arc(&|a| d.cast(&neck, a), a0, a1, n)
+        };
+        let chest_arc = |k: usize| arc(&|a| at(chest, a), angles[k], angles[k + 1], n);
+        let rev = |v: &Vec<[f64; 3]>| v.iter().rev().copied().collect::<Vec<_>>();
+        // shoulder band: the outer columns end in the shoulder seams, the middle in the neckline
+        panels.push(CurvePanel {
+            name: format!("{piece}-shoulder-{}", if front { "left" } else { "right" }),
+            bottom: chest_arc(0),
+            top: rev(seam0),
+            left: arm0,
+            right: seg(c[1], n0),
+            piece: Some(piece.to_owned()),
+        });
+        panels.push(CurvePanel {
+            name: format!("{piece}-neck"),
+            bottom: chest_arc(1),
+            top: neck_arc,
+            left: seg(c[1], n0),
+            right: seg(c[2], n1),
+            piece: Some(piece.to_owned()),
+        });
+        panels.push(CurvePanel {
+            name: format!("{piece}-shoulder-{}", if front { "right" } else { "left" }),
+            bottom: chest_arc(2),
+            top: seam1.clone(),
+            left: seg(c[2], n1),
+            right: arm1,
+            piece: Some(piece.to_owned()),
+        });
+        // the bands below the chest, three columns each
+        for w in levels.windows(2) {
+            let (upper, lower) = (&w[0], &w[1]);
+            let (ua, la) = if front { (upper.front, lower.front) } else { (upper.back, lower.back) };
+            for k in 0..3 {
+                panels.push(CurvePanel {
+                    name: format!("{piece}-{}-{k}", panels.len()),
+                    bottom: arc(&|a| at(lower, a), la[k], la[k + 1], n),
+                    top: arc(&|a| at(upper, a), ua[k], ua[k + 1], n),
+                    left: seg(at(lower, la[k]), at(upper, ua[k])),
+                    right: seg(at(lower, la[k + 1]), at(upper, ua[k + 1])),
+                    piece: Some(piece.to_owned()),
+                });
+            }
+        }
+    }
+    Ok(panels)
+}
+
+/// Moves every point of `pieces` closer to `body` than `clearance` (m), or
+/// inside it, out to `clearance` along the normal of the body's face
+/// nearest it (module docs). A point is moved by its position alone, so
+/// the two sides of a seam stay together.
+pub fn hold_off(pieces: &mut [PanelMesh], body: &FeatureBody, clearance: f64) {
+    let mesh = &body.mesh;
+    let index = SphereIndex::new(mesh);
+    let tree = WindingTree::new(mesh, &WindingOptions::default());
+    for p in pieces.iter_mut().flat_map(|piece| piece.positions.iter_mut()) {
+        let near = index.closest_point(mesh, *p);
+        let inside = tree.winding_number(*p) > 0.5;
+        if !inside && near.distance >= clearance {
+            continue;
+        }
+        let [a, b, c] = mesh.corners(near.face);
+        let normal = (b - a).cross(c - a).normalize_or_zero();
+        *p = near.point + normal * clearance;
+    }
+}
+
+/// The shift dress's garment surface: [`shift_dress_curves`] sampled, one
+/// mesh per piece, held off the body by `clearance_mm` (what
+/// `fixtures/garments/shift-dress.obj` holds).
+///
+/// # Errors
+/// [`shift_dress_curves`]'s; [`AuthorError::Curves`].
+pub fn shift_dress_surface(body: &FeatureBody, o: &ShiftDressOptions) -> Result<Vec<PanelMesh>, AuthorError> {
+    let mut pieces = panels_from_curves(&shift_dress_curves(body, o)?, &o.curves)?;
+    hold_off(&mut pieces, body, o.clearance_mm * MM);
+    Ok(pieces)
+}
+
+/// Authors the shift dress on `body` from its surface (as
+/// [`a_line_skirt`]).
+///
+/// # Errors
+/// [`shift_dress_surface`]'s; [`AuthorError::Garment`].
+pub fn shift_dress(body: &FeatureBody, o: &ShiftDressOptions) -> Result<Template, AuthorError> {
+    let pieces = shift_dress_surface(body, o)?;
+    let mut t = author_from_garment("shift-dress", &pieces, body, &garment_options()).map_err(Box::new)?.template;
+    t.description = "Sleeveless shift dress: jewel neckline, shoulder and side seams, unshaped at the waist, \
+                     hem above the knee; drawn as curves and authored from their surface (issue #18, routes 2 \
+                     and 1)."
+        .into();
+    t.design_body = Some(DesignBody::Reference);
+    Ok(t)
+}
