@@ -139,22 +139,34 @@ fn authored_templates_are_valid_documents_that_decode_exactly() {
     assert!(tights.template.mirror_pairs.contains(&["tights-back-left".into(), "tights-back-right".into()]));
 }
 
+/// The round trip of `a` (method in the module docs): `a` graded onto its
+/// design body `body` (with `design` its obstacle), its graded surface
+/// against the designed one both ways, each as (mean, p95) in mm, printed
+/// under `name`; and the grade.
+fn round_trip(
+    name: &str,
+    a: &Authored,
+    body: &grade3d::body::feature::FeatureBody,
+    design: &Obstacle,
+) -> ((f64, f64), (f64, f64), grade3d::pipeline::Graded) {
+    let g = grade(&a.template, body, Some(design), "design", &GradeOptions::default()).unwrap();
+    let graded = g.cut_mesh().unwrap();
+    let (gi, si) = (SphereIndex::new(&graded), SphereIndex::new(&a.surface));
+    let to_design = mean_p95(graded.positions().iter().map(|&q| si.closest_point(&a.surface, q).distance).collect());
+    let to_graded = mean_p95(a.surface.positions().iter().map(|&q| gi.closest_point(&graded, q).distance).collect());
+    eprintln!(
+        "{name}: graded → designed mean {:.2} mm, p95 {:.2} mm; designed → graded mean {:.2} mm, p95 {:.2} mm",
+        to_design.0, to_design.1, to_graded.0, to_graded.1
+    );
+    (to_design, to_graded, g)
+}
+
 #[test]
 fn round_trip_onto_the_design_body() {
     let obstacle = obstacle(&design_body().mesh);
     let mut failures = Vec::new();
     for (name, a) in authored() {
-        let g = grade(&a.template, design_body(), Some(&obstacle), "design", &GradeOptions::default()).unwrap();
-        let graded = g.cut_mesh().unwrap();
-        let (gi, si) = (SphereIndex::new(&graded), SphereIndex::new(&a.surface));
-        let to_design =
-            mean_p95(graded.positions().iter().map(|&q| si.closest_point(&a.surface, q).distance).collect());
-        let to_graded =
-            mean_p95(a.surface.positions().iter().map(|&q| gi.closest_point(&graded, q).distance).collect());
-        eprintln!(
-            "{name}: graded → designed mean {:.2} mm, p95 {:.2} mm; designed → graded mean {:.2} mm, p95 {:.2} mm",
-            to_design.0, to_design.1, to_graded.0, to_graded.1
-        );
+        let (to_design, to_graded, _) = round_trip(name, a, design_body(), &obstacle);
         for (what, (mean, p95)) in [("graded → designed", to_design), ("designed → graded", to_graded)] {
             if mean > ROUND_TRIP_MEAN_MM || p95 > ROUND_TRIP_P95_MM {
                 failures.push(format!("{name} {what}: mean {mean:.2} mm, p95 {p95:.2} mm"));
@@ -426,15 +438,7 @@ fn a_skirt_from_curves_round_trips_and_grades() {
     assert!(a.girths.contains_key("hip"), "{:?}", a.girths);
     // round trip
     let design = obstacle(&body.mesh);
-    let g = grade(&a.template, body, Some(&design), "design", &GradeOptions::default()).unwrap();
-    let graded = g.cut_mesh().unwrap();
-    let (gi, si) = (SphereIndex::new(&graded), SphereIndex::new(&a.surface));
-    let to_design = mean_p95(graded.positions().iter().map(|&q| si.closest_point(&a.surface, q).distance).collect());
-    let to_graded = mean_p95(a.surface.positions().iter().map(|&q| gi.closest_point(&graded, q).distance).collect());
-    eprintln!(
-        "curve skirt: graded → designed mean {:.2} mm, p95 {:.2} mm; designed → graded mean {:.2} mm, p95 {:.2} mm",
-        to_design.0, to_design.1, to_graded.0, to_graded.1
-    );
+    let (to_design, to_graded, _) = round_trip("curve skirt", &a, body, &design);
     for (mean, p95) in [to_design, to_graded] {
         assert!(mean <= ROUND_TRIP_MEAN_MM && p95 <= ROUND_TRIP_P95_MM, "{mean} {p95}");
     }
@@ -515,17 +519,7 @@ fn drawn_styles_round_trip_and_the_a_line_skirt_grades() {
             a.girths,
             a.unmapped
         );
-        let g = grade(&a.template, &body, Some(&design), "design", &GradeOptions::default()).unwrap();
-        let graded = g.cut_mesh().unwrap();
-        let (gi, si) = (SphereIndex::new(&graded), SphereIndex::new(&a.surface));
-        let to_design =
-            mean_p95(graded.positions().iter().map(|&q| si.closest_point(&a.surface, q).distance).collect());
-        let to_graded =
-            mean_p95(a.surface.positions().iter().map(|&q| gi.closest_point(&graded, q).distance).collect());
-        eprintln!(
-            "{name}: graded → designed mean {:.2} mm, p95 {:.2} mm; designed → graded mean {:.2} mm, p95 {:.2} mm",
-            to_design.0, to_design.1, to_graded.0, to_graded.1
-        );
+        let (to_design, to_graded, g) = round_trip(name, &a, &body, &design);
         for r in &g.pattern.reports {
             eprintln!("{name} {} on its design body: p95 strain {:.2} %", r.name, r.distortion.strain_p95 * 100.0);
         }

@@ -73,7 +73,8 @@ impl Default for FlipOptions {
     }
 }
 
-/// The interior angle of triangle `abc` at `c`, radians (0 when degenerate).
+/// The interior angle at `c` of the triangle `c`, `a`, `b`, radians (0
+/// when degenerate).
 fn angle_at(c: DVec3, a: DVec3, b: DVec3) -> f64 {
     let (u, v) = (a - c, b - c);
     let d = u.length() * v.length();
@@ -86,16 +87,7 @@ fn angle_at(c: DVec3, a: DVec3, b: DVec3) -> f64 {
 
 /// The smallest interior angle of triangle `abc`, radians (0 when degenerate).
 pub fn min_angle(a: DVec3, b: DVec3, c: DVec3) -> f64 {
-    let angle = |p: DVec3, q: DVec3, r: DVec3| {
-        let (u, v) = (q - p, r - p);
-        let d = u.length() * v.length();
-        if d <= 0.0 || !d.is_finite() {
-            0.0
-        } else {
-            (u.dot(v) / d).clamp(-1.0, 1.0).acos()
-        }
-    };
-    angle(a, b, c).min(angle(b, c, a)).min(angle(c, a, b))
+    angle_at(a, b, c).min(angle_at(b, c, a)).min(angle_at(c, a, b))
 }
 
 fn normal(a: DVec3, b: DVec3, c: DVec3) -> Option<DVec3> {
