@@ -532,7 +532,29 @@ fn drawn_styles_round_trip_and_the_a_line_skirt_grades() {
         }
     }
     let t = a_line_template.unwrap();
+    // drafted symmetric (`GarmentOptions::symmetric_nodes_mm`): every node's mirror image across
+    // the plane of its centre-line nodes (x of the hip's front and back ring nodes) is a node
+    let centre = ["hip_front", "hip_back"]
+        .iter()
+        .map(|id| t.nodes.iter().find(|n| n.point.to_string() == *id).expect("ring node").reference[0])
+        .sum::<f64>()
+        / 2.0;
+    let off = t
+        .nodes
+        .iter()
+        .map(|n| {
+            let m = glam::DVec3::new(2.0 * centre - n.reference[0], n.reference[1], n.reference[2]);
+            t.nodes.iter().map(|o| glam::DVec3::from_array(o.reference).distance(m)).fold(f64::MAX, f64::min)
+        })
+        .fold(0.0, f64::max);
+    eprintln!("a-line-skirt: every node's mirror image within {:.3} mm of a node", off * 1e3);
+    assert!(off < 1e-3, "{off} m");
     let plan = block(&t, &body, Some(&design), &GradeOptions::default()).unwrap();
+    // its block's found darts: none, or mirrored pairs (issue #14: two a piece at most)
+    for piece in ["front", "back"] {
+        let n = plan.found.iter().filter(|d| d.panel == piece).count();
+        assert!(n == 0 || n == 2, "{piece}: {n} found darts in the block");
+    }
     let mut b = bars::Bars::default();
     b.open_templates.push((t.name.clone(), A_LINE_STRAIN_CEILING));
     let mut failures = Vec::new();
