@@ -60,6 +60,7 @@ fn an_evenly_stepped_womens_chart_with_lengths_grades_evenly_and_nests() {
 /// the step bar for those in `step_bar`.
 fn grade_set(chart: &str, base_size: &str, nest_bar: &[&str], step_bar: &[&str]) {
     let path = format!("{}/fixtures/size-charts/{chart}", env!("CARGO_MANIFEST_DIR"));
+    let stem = chart.trim_end_matches(".csv").to_owned();
     let text = std::fs::read_to_string(&path).unwrap();
     let chart = parse_csv(&text, &SizeChartOptions::default()).unwrap();
     let model = BodyModel::embedded().unwrap();
@@ -129,6 +130,11 @@ fn grade_set(chart: &str, base_size: &str, nest_bar: &[&str], step_bar: &[&str])
             failures.push(format!("{}: truing {trued:?}", t.name));
         }
         let nest = nests(&sizes).unwrap();
+        // the trued nest, for a look (target/grade-set-exports/<chart>-<template>-nest.svg)
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/grade-set-exports");
+        std::fs::create_dir_all(&dir).unwrap();
+        let svg = grade3d::pattern::export::svg::nest_svg(&t.name, &nest, &Default::default());
+        std::fs::write(dir.join(format!("{stem}-{}-nest.svg", t.name)), svg).unwrap();
         for st in nest_steps(&nest) {
             eprintln!(
                 "{} {} {}→{}: crossings {}, points outside {} (farthest {:.2} mm)",
