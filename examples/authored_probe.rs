@@ -11,8 +11,6 @@
 //! probes that built-in template on its reference body instead; `LINES=1`
 //! prints each piece's internal lines and their problems.)
 
-use std::path::Path;
-
 use grade3d::body::derive::Landmarks;
 use grade3d::body::derive::{derive_features, DeriveOptions};
 use grade3d::body::feature::FeatureBody;
@@ -20,8 +18,7 @@ use grade3d::body::vocab::CurveId;
 use grade3d::collide::cache::Obstacle;
 use grade3d::collide::render::{GpuContext, RenderOptions};
 use grade3d::geom::winding::{WindingOptions, WindingTree};
-use grade3d::io::gltf::{read_mesh, GltfReadOptions};
-use grade3d::io::landmarks::parse_landmarks;
+use grade3d::io::gltf::read_mesh;
 use grade3d::mannequin::landmarks::hm08_landmarks;
 use grade3d::mannequin::model::BodyModel;
 use grade3d::mannequin::population::{sample_population, scan_like};
@@ -31,6 +28,9 @@ use grade3d::template::from_garment::{author_from_garment, GarmentOptions};
 use grade3d::template::garment_panels::PanelMesh;
 use grade3d::template::girth::girth_plane;
 
+#[path = "../tests/common/mod.rs"]
+mod common;
+
 fn main() {
     let filter = std::env::args().nth(1);
     let gpu = GpuContext::new().unwrap();
@@ -38,7 +38,7 @@ fn main() {
         maps: gpu.render(&b.mesh, &RenderOptions::default()).unwrap(),
         tree: WindingTree::new(&b.mesh, &WindingOptions::default()),
     };
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures");
+    let root = common::fixtures();
     let model = BodyModel::embedded().unwrap();
     let base = model.base_mesh().unwrap();
     let lm = hm08_landmarks(model, &base, &Default::default()).unwrap();
@@ -101,33 +101,11 @@ fn main() {
     print(&design, "design", &g);
     let decide = std::env::var("DECIDE").is_ok();
     let mut bodies: Vec<(String, FeatureBody)> = Vec::new();
-    let mut names: Vec<String> = std::fs::read_dir(root.join("astm"))
-        .unwrap()
-        .filter_map(|e| e.ok()?.file_name().into_string().ok())
-        .filter_map(|n| n.strip_suffix(".glb").map(str::to_owned))
-        .collect();
-    names.sort();
-    for name in names.into_iter().filter(|n| filter.as_ref().is_none_or(|f| n.contains(f.as_str()))) {
-        let dir = root.join("astm");
-        let mesh =
-            read_mesh(&std::fs::read(dir.join(format!("{name}.glb"))).unwrap(), &GltfReadOptions::default()).unwrap();
-        let lm =
-            parse_landmarks(&std::fs::read_to_string(dir.join(format!("{name}.landmarks.json"))).unwrap()).unwrap();
-        bodies.push((name, derive_features(mesh, &lm, &DeriveOptions::default()).unwrap()));
-    }
-    if std::env::var("FIXTURES").is_ok() {
-        let dir = root.join("bodies");
-        let mut names: Vec<String> = std::fs::read_dir(&dir)
-            .unwrap()
-            .filter_map(|e| e.ok()?.file_name().into_string().ok())
-            .filter_map(|n| n.strip_suffix(".glb").map(str::to_owned))
-            .collect();
-        names.sort();
-        for name in names {
-            let mesh = read_mesh(&std::fs::read(dir.join(format!("{name}.glb"))).unwrap(), &GltfReadOptions::default())
-                .unwrap();
-            let lm =
-                parse_landmarks(&std::fs::read_to_string(dir.join(format!("{name}.landmarks.json"))).unwrap()).unwrap();
+    // the ASTM sizes matching the filter, and with `FIXTURES` the eight fixture bodies
+    let fixtures = std::env::var("FIXTURES").is_ok();
+    for (name, mesh, lm) in common::fixture_bodies() {
+        let astm = name.starts_with("astm/") && filter.as_ref().is_none_or(|f| name.contains(f.as_str()));
+        if astm || (fixtures && name.starts_with("bodies/")) {
             bodies.push((name, derive_features(mesh, &lm, &DeriveOptions::default()).unwrap()));
         }
     }

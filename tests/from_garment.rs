@@ -139,16 +139,24 @@ fn authored_templates_are_valid_documents_that_decode_exactly() {
     assert!(tights.template.mirror_pairs.contains(&["tights-back-left".into(), "tights-back-right".into()]));
 }
 
-/// The round trip of `a` (method in the module docs): `a` graded onto its
-/// design body `body` (with `design` its obstacle), its graded surface
-/// against the designed one both ways, each as (mean, p95) in mm, printed
-/// under `name`; and the grade.
+/// The round trip of `a` (method in the module docs), printed under
+/// `name` after what was authored: `a` graded onto its design body `body`
+/// (with `design` its obstacle), its graded surface against the designed
+/// one both ways, each as (mean, p95) in mm; and the grade.
 fn round_trip(
     name: &str,
     a: &Authored,
     body: &grade3d::body::feature::FeatureBody,
     design: &Obstacle,
 ) -> ((f64, f64), (f64, f64), grade3d::pipeline::Graded) {
+    eprintln!(
+        "{name}: {} nodes, {} faces, pieces {:?}, ease {:?}, unmapped {:?}",
+        a.template.nodes.len(),
+        a.template.faces.len(),
+        a.pieces,
+        a.girths,
+        a.unmapped
+    );
     let g = grade(&a.template, body, Some(design), "design", &GradeOptions::default()).unwrap();
     let graded = g.cut_mesh().unwrap();
     let (gi, si) = (SphereIndex::new(&graded), SphereIndex::new(&a.surface));
@@ -427,14 +435,6 @@ fn a_skirt_from_curves_round_trips_and_grades() {
     let a =
         author_from_garment("curve-skirt", &pieces, body, &GarmentOptions { cut: TubeCut::None, ..Default::default() })
             .unwrap_or_else(|e| panic!("{e}"));
-    eprintln!(
-        "curve skirt: {} nodes, {} faces, pieces {:?}, ease {:?}, unmapped {:?}",
-        a.template.nodes.len(),
-        a.template.faces.len(),
-        a.pieces,
-        a.girths,
-        a.unmapped
-    );
     assert!(a.girths.contains_key("hip"), "{:?}", a.girths);
     // round trip
     let design = obstacle(&body.mesh);
@@ -511,14 +511,6 @@ fn drawn_styles_round_trip_and_the_a_line_skirt_grades() {
         assert_eq!(names, ["front", "back"], "{name}");
         let a = author_from_garment(name, &read, &body, &drawn::garment_options())
             .unwrap_or_else(|e| panic!("{name}: {e}"));
-        eprintln!(
-            "{name}: {} nodes, {} faces, pieces {:?}, ease {:?}, unmapped {:?}",
-            a.template.nodes.len(),
-            a.template.faces.len(),
-            a.pieces,
-            a.girths,
-            a.unmapped
-        );
         let (to_design, to_graded, g) = round_trip(name, &a, &body, &design);
         for r in &g.pattern.reports {
             eprintln!("{name} {} on its design body: p95 strain {:.2} %", r.name, r.distortion.strain_p95 * 100.0);

@@ -85,10 +85,7 @@ impl<'a> Drawing<'a> {
         let c = self.body.curves.get(&curve).ok_or_else(|| missing(curve.as_str()))?;
         let plane = girth::girth_plane(self.body, curve).ok_or_else(|| missing(curve.as_str()))?;
         let loop_ = girth::bridged(&c.polyline, &plane);
-        let r = girth::ring_radial(&loop_, &plane, ease_mm * MM);
-        let cum = loop_.cumulative();
-        let points: Vec<DVec3> =
-            cum[..loop_.points.len()].iter().map(|&s| girth::eased(&loop_, s, r, &plane)).collect();
+        let points = girth::eased_vertices(&loop_, girth::ring_radial(&loop_, &plane, ease_mm * MM), &plane);
         if points.len() < 3 {
             return Err(missing(curve.as_str()));
         }
@@ -172,13 +169,31 @@ fn seg(p: DVec3, q: DVec3) -> Vec<[f64; 3]> {
     vec![p.to_array(), q.to_array()]
 }
 
+/// The patch of `piece` between two rings: `lower` from angle `l.0` to
+/// `l.1` at the bottom, `upper` from `u.0` to `u.1` at the top, straight
+/// sides between their ends; `n` points an arc.
+fn band(
+    name: String,
+    piece: &str,
+    (lower, l): (&dyn Fn(f64) -> DVec3, (f64, f64)),
+    (upper, u): (&dyn Fn(f64) -> DVec3, (f64, f64)),
+    n: usize,
+) -> CurvePanel {
+    CurvePanel {
+        name,
+        bottom: arc(lower, l.0, l.1, n),
+        top: arc(upper, u.0, u.1, n),
+        left: seg(lower(l.0), upper(u.0)),
+        right: seg(lower(l.1), upper(u.1)),
+        piece: Some(piece.to_owned()),
+    }
+}
+
 /// Knobs of the A-line skirt ([`a_line_skirt_curves`]).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct ALineOptions {
-    /// Waist ease, mm. Default 20 (the skirt ends at the waist: its edge
-    /// lies on the waist girth, where less left the ASTM bodies' waists
-    /// through the garment).
+    /// Waist ease, mm. Default 20.
     pub waist_ease_mm: f64,
     /// Hip ease, mm. Default 40.
     pub hip_ease_mm: f64,
@@ -227,23 +242,9 @@ pub fn a_line_skirt_curves(body: &FeatureBody, o: &ALineOptions) -> Result<Vec<C
     let on_hem = |a: f64| drop_position(on_hip(a), d.up, hip.centre, o.length_below_hip_m, o.hem_flare_mm * MM);
     let mut panels = Vec::new();
     // front: from the left side round the front to the right; back: from the right round the back to the left
-    for (piece, (w0, w1), (h0, h1)) in [("front", (wl, wr), (hl, hr)), ("back", (wr, wl + TAU), (hr, hl + TAU))] {
-        panels.push(CurvePanel {
-            name: format!("{piece}-waist-to-hip"),
-            bottom: arc(&on_hip, h0, h1, n),
-            top: arc(&on_waist, w0, w1, n),
-            left: seg(on_hip(h0), on_waist(w0)),
-            right: seg(on_hip(h1), on_waist(w1)),
-            piece: Some(piece.to_owned()),
-        });
-        panels.push(CurvePanel {
-            name: format!("{piece}-hip-to-hem"),
-            bottom: arc(&on_hem, h0, h1, n),
-            top: arc(&on_hip, h0, h1, n),
-            left: seg(on_hem(h0), on_hip(h0)),
-            right: seg(on_hem(h1), on_hip(h1)),
-            piece: Some(piece.to_owned()),
-        });
+    for (piece, w, h) in [("front", (wl, wr), (hl, hr)), ("back", (wr, wl + TAU), (hr, hl + TAU))] {
+        panels.push(band(format!("{piece}-waist-to-hip"), piece, (&on_hip, h), (&on_waist, w), n));
+        panels.push(band(format!("{piece}-hip-to-hem"), piece, (&on_hem, h), (&on_hip, h), n));
     }
     Ok(panels)
 }
@@ -496,14 +497,9 @@ pub fn shift_dress_curves(body: &FeatureBody, o: &ShiftDressOptions) -> Result<V
             let (upper, lower) = (&w[0], &w[1]);
             let (ua, la) = if front { (upper.front, lower.front) } else { (upper.back, lower.back) };
             for k in 0..3 {
-                panels.push(CurvePanel {
-                    name: format!("{piece}-{}-{k}", panels.len()),
-                    bottom: arc(&|a| at(lower, a), la[k], la[k + 1], n),
-                    top: arc(&|a| at(upper, a), ua[k], ua[k + 1], n),
-                    left: seg(at(lower, la[k]), at(upper, ua[k])),
-                    right: seg(at(lower, la[k + 1]), at(upper, ua[k + 1])),
-                    piece: Some(piece.to_owned()),
-                });
+                let name = format!("{piece}-{}-{k}", panels.len());
+                let (on_lower, on_upper) = (|a| at(lower, a), |a| at(upper, a));
+                panels.push(band(name, piece, (&on_lower, (la[k], la[k + 1])), (&on_upper, (ua[k], ua[k + 1])), n));
             }
         }
     }

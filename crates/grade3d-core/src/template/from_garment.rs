@@ -429,6 +429,14 @@ struct Axes {
     centre: DVec3,
 }
 
+impl Axes {
+    /// `p` mirrored across the body's mid-sagittal plane (through `centre`,
+    /// normal `left`).
+    fn mirror(&self, p: DVec3) -> DVec3 {
+        p - 2.0 * self.left * (p - self.centre).dot(self.left)
+    }
+}
+
 fn axes(body: &FeatureBody) -> Result<Axes, FromGarmentError> {
     let point =
         |p: PointId| body.points.get(&p).map(|q| q.position).ok_or_else(|| FromGarmentError::Body(p.to_string()));
@@ -1345,8 +1353,7 @@ fn symmetric_nodes(soup: &Soup, ax: &Axes, tolerance: f64, listed: &BTreeSet<u32
     let used: Vec<u32> = soup.triangles.iter().flatten().copied().collect::<BTreeSet<u32>>().into_iter().collect();
     let points: Vec<DVec3> = used.iter().map(|&v| soup.positions[v as usize]).collect();
     let grid = PointGrid::new(&points, tolerance);
-    let mirror = |p: DVec3| p - 2.0 * ax.left * (p - ax.centre).dot(ax.left);
-    let image = |v: u32| grid.nearest_within(mirror(soup.positions[v as usize]), tolerance).map(|i| used[i]);
+    let image = |v: u32| grid.nearest_within(ax.mirror(soup.positions[v as usize]), tolerance).map(|i| used[i]);
     if used.iter().any(|&v| image(v).is_none()) {
         return false;
     }
@@ -1616,7 +1623,6 @@ fn mirror_pairs(soup: &Soup, names: &[String], ax: &Axes, tolerance: f64) -> Vec
             s.into_iter().map(|v| soup.positions[v as usize]).collect()
         })
         .collect();
-    let mirror = |p: DVec3| p - 2.0 * ax.left * (p - ax.centre).dot(ax.left);
     let mut out = Vec::new();
     let mut paired = BTreeSet::new();
     for i in 0..names.len() {
@@ -1627,7 +1633,7 @@ fn mirror_pairs(soup: &Soup, names: &[String], ax: &Axes, tolerance: f64) -> Vec
             let mean = vertex_sets[i]
                 .iter()
                 .map(|&p| {
-                    let m = mirror(p);
+                    let m = ax.mirror(p);
                     vertex_sets[j].iter().map(|q| q.distance(m)).fold(f64::MAX, f64::min)
                 })
                 .sum::<f64>()

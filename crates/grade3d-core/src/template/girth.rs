@@ -129,6 +129,13 @@ pub fn eased(loop_: &Polyline, s: f64, radial: f64, plane: &Plane) -> DVec3 {
     Walk::new(loop_).eased(s, radial, plane)
 }
 
+/// Every vertex of `loop_` moved `radial` outward within `plane` ([`eased`]
+/// at each vertex's arc parameter): the girth eased as decoding places its
+/// ring ([`ring_radial`]'s trial rings).
+pub fn eased_vertices(loop_: &Polyline, radial: f64, plane: &Plane) -> Vec<DVec3> {
+    Walk::new(loop_).eased_vertices(radial, plane)
+}
+
 /// A loop ready for many [`eased`] points: its cumulative arc lengths,
 /// centroid and length taken once (issue #15: [`sampled_radial`]'s
 /// bisection re-took them for every point of every trial ring), the points
@@ -143,6 +150,11 @@ struct Walk<'a> {
 impl<'a> Walk<'a> {
     fn new(loop_: &'a Polyline) -> Self {
         Self { loop_, cum: loop_.cumulative(), centroid: loop_.centroid(), length: loop_.length() }
+    }
+
+    /// [`eased_vertices`].
+    fn eased_vertices(&self, radial: f64, plane: &Plane) -> Vec<DVec3> {
+        self.cum[..self.loop_.points.len()].iter().map(|&s| self.eased(s, radial, plane)).collect()
     }
 
     /// [`eased`].
@@ -390,11 +402,9 @@ const RADIAL_ITERATIONS: usize = 4;
 pub fn ring_radial(loop_: &Polyline, plane: &Plane, ease: f64) -> f64 {
     let mut r = ease / std::f64::consts::TAU;
     let base = tape_length(&[loop_], plane);
-    let cum = loop_.cumulative();
-    let params: Vec<f64> = cum[..loop_.points.len()].to_vec();
     let walk = Walk::new(loop_);
     for _ in 0..RADIAL_ITERATIONS {
-        let ring = Polyline::new(params.iter().map(|&s| walk.eased(s, r, plane)).collect(), true);
+        let ring = Polyline::new(walk.eased_vertices(r, plane), true);
         let gained = tape_length(&[&ring], plane) - base;
         if !(gained.is_finite() && gained.abs() > f64::EPSILON) || ease == 0.0 {
             break;
