@@ -53,6 +53,19 @@ fn main() {
         triangles: m.triangles().iter().map(|t| t.map(|v| v.0)).collect(),
     };
     let t = match std::env::var("TEMPLATE") {
+        Ok(name) if name == "live:shift-dress" => {
+            // the dress drawn here with `DOPTS` (JSON ShiftDressOptions); `SURFACE=path` writes its OBJ
+            design = grade3d::template::library::reference_body().unwrap();
+            let d: grade3d::template::drawn::ShiftDressOptions =
+                std::env::var("DOPTS").map(|j| serde_json::from_str(&j).unwrap()).unwrap_or_default();
+            let pieces = grade3d::template::drawn::shift_dress_surface(&design, &d).unwrap();
+            if let Ok(path) = std::env::var("SURFACE") {
+                std::fs::write(path, grade3d::io::obj::write_obj_panels(&pieces, "live dress")).unwrap();
+            }
+            author_from_garment("shift-dress", &pieces, &design, &grade3d::template::drawn::garment_options())
+                .unwrap()
+                .template
+        }
         Ok(name) if name.starts_with("drawn:") => {
             // a drawn style authored here: `GOPTS` (JSON) overrides the authoring options
             design = grade3d::template::library::reference_body().unwrap();
@@ -142,6 +155,10 @@ fn main() {
 }
 
 fn print(body: &FeatureBody, name: &str, g: &Graded) {
+    if let Ok(dir) = std::env::var("SVG") {
+        let svg = grade3d::pattern::export::svg::pieces_svg(&g.pattern.pieces, &Default::default());
+        std::fs::write(format!("{dir}/{}.svg", name.replace('/', "-")), svg).unwrap();
+    }
     let hip = girth_plane(body, CurveId::Hip).unwrap();
     let mut line = format!("{name:28}");
     for r in &g.pattern.reports {

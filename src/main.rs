@@ -66,9 +66,17 @@ enum Command {
         /// The template's name.
         #[arg(long)]
         name: String,
-        /// Its design body: `reference` or `makehuman-base`.
-        #[arg(long, default_value = "reference")]
+        /// Its design body: `reference` or `makehuman-base`. (An avatar the garment was draped
+        /// on is kept with the template by the service: `POST /v1/templates/from-garment` with
+        /// `body_scan`.)
+        #[arg(long, default_value = "reference", conflicts_with = "body_chart")]
         body: String,
+        /// Or a size chart (CSV or JSON) one of whose sizes is the design body...
+        #[arg(long, requires = "body_size")]
+        body_chart: Option<PathBuf>,
+        /// ...this size (its label): the mannequin fitted to it.
+        #[arg(long, requires = "body_chart")]
+        body_size: Option<String>,
         /// The garment's units: `m`, `cm` or `mm` (default: found from its size).
         #[arg(long)]
         units: Option<String>,
@@ -189,8 +197,9 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
         Command::Panels { dir } => write_panels(&dir)?,
         Command::Openapi => print!("{}", grade3d::service::api::openapi_yaml()?),
         Command::Measure { body, landmarks } => measure_body(&body, &landmarks)?,
-        Command::Author { garment, name, body, units, options, out } => {
-            author_template(&garment, name, &body, units.as_deref(), options.as_deref(), &out)?
+        Command::Author { garment, name, body, body_chart, body_size, units, options, out } => {
+            let chart = body_chart.as_deref().zip(body_size.as_deref());
+            author_template(&garment, name, &body, chart, units.as_deref(), options.as_deref(), &out)?
         }
     }
     Ok(())
@@ -202,17 +211,26 @@ fn author_template(
     garment: &std::path::Path,
     name: String,
     body: &str,
+    chart: Option<(&std::path::Path, &str)>,
     units: Option<&str>,
     options: Option<&std::path::Path>,
     out: &std::path::Path,
 ) -> Result<(), Box<dyn std::error::Error>> {
-    use grade3d::service::author::{author, AuthorParts, AuthorRequestError};
+    use grade3d::service::author::{author_on, chart_size, AuthorParts, PartsBody};
+    use grade3d::template::from_garment::{design_body, DesignBody};
     let bad = |what: String| -> Box<dyn std::error::Error> { Box::new(BadInput(what)) };
     let bytes = std::fs::read(garment).map_err(|e| bad(format!("{}: {e}", garment.display())))?;
     // an enum's value by its JSON name
     let word = |text: &str| serde_json::Value::String(text.to_owned());
-    let body = serde_json::from_value(word(body))
-        .map_err(|_| bad(format!("--body `{body}`: allowed reference, makehuman-base")))?;
+    let which: DesignBody = match chart {
+        Some((path, size)) => {
+            let text = std::fs::read_to_string(path).map_err(|e| bad(format!("{}: {e}", path.display())))?;
+            chart_size(&word(&text), size, &Default::default(), ("--body-chart", "--body-size"))
+                .map_err(|p| bad(format!("{}: {}", p.field.unwrap_or_default(), p.detail)))?
+        }
+        None => serde_json::from_value(word(body))
+            .map_err(|_| bad(format!("--body `{body}`: allowed reference, makehuman-base")))?,
+    };
     let units = match units {
         Some(u) => Some(serde_json::from_value(word(u)).map_err(|_| bad(format!("--units `{u}`: allowed m, cm, mm")))?),
         None => None,
@@ -224,11 +242,14 @@ fn author_template(
         }
         None => Default::default(),
     };
-    let parts = AuthorParts { garment: bytes.into(), name, body, units, options };
-    let (template, report) = author(&parts).map_err(|e| match e {
-        AuthorRequestError::Body(_) => Box::new(e) as Box<dyn std::error::Error>,
-        e => bad(format!("{}: {e}", garment.display())),
+    // a chart size that cannot be fitted is the input's fault; the embedded model's failure is not
+    let built = design_body(&which).map_err(|e| match e {
+        grade3d::template::library::AuthorError::Fit(f) => bad(format!("--body-chart: {f}")),
+        e => Box::new(e) as Box<dyn std::error::Error>,
     })?;
+    let parts = AuthorParts { garment: bytes.into(), name, body: PartsBody::Design(which.clone()), units, options };
+    let (template, report) =
+        author_on(&parts, &built, which, None).map_err(|e| bad(format!("{}: {e}", garment.display())))?;
     std::fs::write(out, template.to_json()).map_err(|e| format!("{}: {e}", out.display()))?;
     println!("{}", serde_json::to_string_pretty(&report)?);
     Ok(())

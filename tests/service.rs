@@ -439,6 +439,173 @@ fn a_template_is_authored_from_a_garment() {
     refused(&[("garment", Some("s.glb"), &skirt), ("name", None, b"x"), ("units", None, b"mm")], 422, "garment");
 }
 
+/// The hip ease the built-in A-line skirt was authored with on the body it
+/// was drawn on (the reference body), mm: what authoring the same drawing
+/// must read back on any body it was drawn on.
+fn a_line_hip_ease_mm() -> f64 {
+    let lib = grade3d::template::library::builtin().unwrap();
+    lib.iter().find(|t| t.name == "a-line-skirt").unwrap().ease_mm["hip"]
+}
+
+/// Issue #18, item 1: the design body may be the avatar the garment was
+/// draped on (a scan in its own units and axes, kept with the template and
+/// edited on after a restart) or a size of a chart. Planted answers: the
+/// A-line skirt drawn on the reference body, exported with it in
+/// millimetres and +Z up, and the A-line drawn on a chart size's
+/// mannequin, each authored with the hip ease it was drawn with.
+#[test]
+fn a_template_is_authored_on_an_avatar_and_on_a_chart_size() {
+    use grade3d::template::drawn::{a_line_skirt_surface, garment_options, ALineOptions};
+    let data = temp_dir("design-bodies");
+    let s = Server::start(&data, &[("GRADE3D_MAX_BODY_BYTES", "16000000")]);
+    let post = |s: &Server, parts: &[(&str, Option<&str>, &[u8])]| {
+        let (ct, body) = multipart(parts);
+        let a = auth();
+        call(
+            "POST",
+            &s.url("/v1/templates/from-garment"),
+            &[("Content-Type", ct.as_str()), (a.0, a.1.as_str())],
+            Some(&body),
+        )
+    };
+    let options = serde_json::to_string(&garment_options()).unwrap();
+    // the avatar: the reference body and its landmarks in millimetres, +Z up ((x, y, z) ↦ (x, −z, y))
+    let body = grade3d::template::library::reference_body().unwrap();
+    let export = |p: glam::DVec3| glam::DVec3::new(p.x, -p.z, p.y) * 1000.0;
+    let avatar = grade3d::io::gltf::write_glb(&body.mesh.map_positions(export).unwrap(), None, &[], "avatar").unwrap();
+    let model = grade3d::mannequin::model::BodyModel::embedded().unwrap();
+    let lm = grade3d::mannequin::landmarks::hm08_landmarks(model, &body.mesh, &Default::default()).unwrap();
+    let lm = grade3d::body::derive::Landmarks {
+        points: lm.points.iter().map(|(&k, &p)| (k, export(p) * 1e-3)).collect(),
+        curves: Default::default(),
+    };
+    let landmarks = grade3d::io::landmarks::write_landmarks(&lm);
+    let mut skirt = a_line_skirt_surface(&body, &ALineOptions::default()).unwrap();
+    for piece in &mut skirt {
+        piece.positions.iter_mut().for_each(|p| *p = export(*p));
+    }
+    let garment = grade3d::io::obj::write_obj_panels(&skirt, "an A-line skirt draped on its avatar, mm, +Z up");
+    let r = post(
+        &s,
+        &[
+            ("garment", Some("skirt.obj"), garment.as_bytes()),
+            ("name", None, b"avatar-skirt"),
+            ("body_scan", Some("avatar.glb"), &avatar),
+            ("body_landmarks", Some("avatar.json"), landmarks.as_bytes()),
+            ("options", None, options.as_bytes()),
+        ],
+    );
+    assert_eq!(r.status, 201, "{}", r.text());
+    let j = r.json();
+    assert_eq!(j["units"], "mm", "{j}");
+    let id = j["design_body"]["scan"]["id"].as_str().expect("a stored scan").to_owned();
+    let hip = j["ease_mm"]["hip"].as_f64().unwrap();
+    // the same body, read from the avatar: the same ease but for rounding
+    assert!((hip - a_line_hip_ease_mm()).abs() < 0.5, "hip ease {hip} mm on the avatar");
+    let stored = call("GET", &s.url("/v1/templates/avatar-skirt"), &[], None).json();
+    assert_eq!(stored["design_body"]["scan"]["id"], id.as_str());
+    // after a restart the template is edited on its avatar, read back from the store: the lowest node
+    // 10 mm forward
+    drop(s);
+    let s = Server::start(&data, &[]);
+    let t = grade3d::template::format::Template::from_json(&stored.to_string()).unwrap();
+    let hem = (0..t.nodes.len()).min_by(|&a, &b| t.nodes[a].reference[1].total_cmp(&t.nodes[b].reference[1]));
+    let edit = serde_json::json!({
+        "view": {"view": "right", "metres_per_px": 0.001, "origin_px": [500.0, 500.0]},
+        "edit": {"kind": "move_node", "node": hem.unwrap(), "stroke": [[100.0, 100.0], [110.0, 100.0]]}
+    });
+    let a = auth();
+    let r = call(
+        "POST",
+        &s.url("/v1/templates/avatar-skirt/edits"),
+        &[json_ct(), (a.0, a.1.as_str())],
+        Some(edit.to_string().as_bytes()),
+    );
+    assert_eq!(r.status, 201, "{}", r.text());
+    assert_eq!(r.json()["report"]["design_body"]["scan"]["id"], id.as_str());
+    // a chart's size: the A-line drawn on that size's mannequin
+    let chart = fixture("size-charts/womens-34-44-cm.csv");
+    let parsed = grade3d::mannequin::size_chart::parse_csv(
+        std::str::from_utf8(&chart).unwrap(),
+        &grade3d::mannequin::size_chart::SizeChartOptions::default(),
+    )
+    .unwrap();
+    let row = parsed.rows.iter().find(|r| r.size == "38").unwrap();
+    let fitted =
+        grade3d::mannequin::fit::fit_size(model, row, &grade3d::mannequin::fit::FitOptions::for_sex(parsed.sex))
+            .unwrap();
+    let skirt = a_line_skirt_surface(&fitted.body, &ALineOptions::default()).unwrap();
+    let garment = grade3d::io::obj::write_obj_panels(&skirt, "an A-line skirt drawn on size 38");
+    let with_chart = |extra: &[(&'static str, Option<&'static str>, &'static [u8])]| {
+        let mut parts: Vec<(&str, Option<&str>, &[u8])> = vec![
+            ("garment", Some("skirt.obj"), garment.as_bytes()),
+            ("name", None, b"size-38-skirt"),
+            ("options", None, options.as_bytes()),
+        ];
+        parts.extend_from_slice(extra);
+        post(&s, &parts)
+    };
+    let chart: &'static [u8] = chart.leak();
+    let r = with_chart(&[("body_chart", Some("chart.csv"), chart), ("body_size", None, b"38")]);
+    assert_eq!(r.status, 201, "{}", r.text());
+    let j = r.json();
+    assert_eq!(j["design_body"]["chart-size"]["row"]["size"], "38", "{j}");
+    assert_eq!(j["design_body"]["chart-size"]["sex"], "female", "{j}");
+    let hip = j["ease_mm"]["hip"].as_f64().unwrap();
+    // the drawing's ease on its body (authored on the reference body instead, the ease would be off by
+    // the difference of the two hips)
+    assert!((hip - a_line_hip_ease_mm()).abs() < 2.0, "hip ease {hip} mm on size 38");
+    // refusals, each naming its part
+    let refused = |extra: &[(&'static str, Option<&'static str>, &'static [u8])], status: u16, field: &str| {
+        let r = with_chart(extra);
+        assert_eq!((r.status, r.json()["field"].as_str()), (status, Some(field)), "{}", r.text());
+    };
+    refused(&[("body_chart", Some("chart.csv"), chart), ("body_size", None, b"39")], 400, "body_size");
+    refused(&[("body_chart", Some("chart.csv"), chart)], 400, "body_size");
+    refused(&[("body_size", None, b"38")], 400, "body_chart");
+    refused(
+        &[("body_chart", Some("c.csv"), b"size,unit,hip_girth\n38,furlong,1\n"), ("body_size", None, b"38")],
+        400,
+        "body_chart",
+    );
+    refused(
+        &[("body", None, b"reference"), ("body_chart", Some("chart.csv"), chart), ("body_size", None, b"38")],
+        400,
+        "body_chart",
+    );
+    refused(&[("body_landmarks", Some("l.json"), b"{}")], 400, "body_scan");
+    refused(&[("up", None, b"+z")], 400, "body_scan");
+    refused(&[("body_scan", Some("a.glb"), b"glTF\x02\0\0\0")], 400, "body_scan");
+}
+
+/// `grade3d author` on a chart's size: the template records it; a size the
+/// chart lacks exits 2 naming `--body-size` and the sizes it has.
+#[test]
+fn the_author_command_takes_a_chart_size_for_its_design_body() {
+    let dir = temp_dir("author-cli");
+    let out = dir.join("t.json");
+    let run = |size: &str| {
+        Command::new(env!("CARGO_BIN_EXE_grade3d"))
+            .arg("author")
+            .arg(root().join("fixtures/garments/a-line-skirt.obj"))
+            .args(["--name", "cli-skirt", "--body-size", size, "--out"])
+            .arg(&out)
+            .arg("--body-chart")
+            .arg(root().join("fixtures/size-charts/womens-34-44-cm.csv"))
+            .env("RUST_LOG", "warn")
+            .output()
+            .unwrap()
+    };
+    let o = run("38");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let t: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert_eq!(t["design_body"]["chart-size"]["row"]["size"], "38", "{}", t["design_body"]);
+    let o = run("39");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("--body-size") && err.contains("34, 36, 38"), "{err}");
+}
+
 #[test]
 fn writes_are_refused_without_a_configured_key_and_reads_can_be_protected() {
     let s = Server::start(&temp_dir("protect"), &[("GRADE3D_PROTECT_READS", "true")]);

@@ -5,36 +5,70 @@
 //! geometry is [`crate::template::from_garment`]. `POST
 //! /v1/templates/from-curves` (item 2) runs [`author_curves`]: the panels'
 //! Coons patches ([`crate::template::from_curves`]) authored the same way.
+//!
+//! The design body is one of ours (`body`), a size of a chart
+//! (`body_chart` and `body_size`: the mannequin fitted to that row), or
+//! the avatar the garment was draped on (`body_scan`, with or without
+//! `body_landmarks`; read as any scan is, issue #11): the garment is then
+//! in the avatar's own axes and units and follows it into the body frame,
+//! and the scan is kept in the store under its content id
+//! ([`crate::store::TemplateStore::put_scan`], written before the template
+//! that names it) so that the template's sketch edits are made on it.
 
 use std::collections::BTreeMap;
+use std::sync::Arc;
 
 use axum::body::Bytes;
 use axum::extract::{FromRequest, Multipart, Request};
 use serde::{Deserialize, Serialize};
 
 use super::problem::Problem;
-use crate::body::frame::Units;
+use crate::body::feature::FeatureBody;
+use crate::body::frame::{FrameHints, FrameReport, Units};
 use crate::io::garment::{read_garment, scaled, GarmentFileError};
 use crate::io::gltf::GltfReadOptions;
+use crate::mannequin::size_chart::{parse_csv, parse_json, SizeChart, SizeChartOptions};
+use crate::results::content_id;
+use crate::store::StoredScan;
 use crate::template::format::Template;
 use crate::template::from_curves::{panels_from_curves, CurvePanel, CurvesOptions, FromCurvesError};
 use crate::template::from_garment::{
     author_from_garment, detect_units, DesignBody, FromGarmentError, GarmentOptions, Unmapped,
 };
+use crate::template::garment_panels::PanelMesh;
+use crate::AppState;
 
 /// Multipart body of `POST /v1/templates/from-garment`.
 #[derive(Debug, utoipa::ToSchema)]
 pub struct GarmentUpload {
     /// The garment: GLB/glTF with one mesh (or primitive) per pattern piece, named, or OBJ with one
-    /// `g`/`o` group per piece; draped on its design body, in that body's frame (+Y up, facing +Z).
+    /// `g`/`o` group per piece; draped on its design body, in that body's frame (+Y up, facing +Z), or,
+    /// with `body_scan`, in the scan's own axes and units.
     #[schema(value_type = String, format = Binary)]
     pub garment: Vec<u8>,
     /// The new template's name (a slug).
     pub name: String,
     /// The body it was designed on: `reference` (the built-in templates' mannequin, default) or
     /// `makehuman-base` (MakeHuman's base mesh, the body its helper geometry and clothes are modelled on).
-    pub body: Option<DesignBody>,
-    /// The garment's units: `m`, `cm` or `mm` (default: found from its size).
+    /// At most one of `body`, `body_scan` and `body_chart`.
+    pub body: Option<String>,
+    /// The avatar the garment was draped on (GLB, as a scan: any units, +Y or +Z up, any facing, with or
+    /// without landmarks), kept with the template as its design body.
+    #[schema(value_type = Option<String>, format = Binary)]
+    pub body_scan: Option<Vec<u8>>,
+    /// The avatar's landmarks (JSON, as for a scan), all, some or none.
+    pub body_landmarks: Option<String>,
+    /// The avatar's up axis (`+y`, `+z`; default: found).
+    pub up: Option<String>,
+    /// The avatar's facing (`+x` … `-z`; default: found).
+    pub facing: Option<String>,
+    /// A size chart (CSV text or a JSON size chart document) one of whose sizes the garment was designed
+    /// on: the mannequin fitted to that size.
+    pub body_chart: Option<String>,
+    /// The size of `body_chart` (its label).
+    pub body_size: Option<String>,
+    /// The garment's units: `m`, `cm` or `mm` (default: found from its size); with `body_scan`, the
+    /// avatar's and the garment's.
     pub units: Option<Units>,
     /// Authoring options (JSON): `max_edge_mm` (90), `cut` (`none`, `sides`, `sides_and_centre`),
     /// `profile_points` (7), `nodes` (extra node positions, m), `defaults` (grading defaults), …
@@ -47,10 +81,19 @@ pub struct GarmentUpload {
 pub struct CurvesUpload {
     /// The new template's name (a slug).
     pub name: String,
-    /// The body the curves were drawn on (as for `from-garment`; default `reference`), in its
-    /// frame: metres, +Y up, facing +Z.
+    /// The body the curves were drawn on (default `reference`), in its frame: metres, +Y up, facing +Z:
+    /// `reference`, `makehuman-base`, `{"chart-size": {"sex", "row"}}` as a template records it, or
+    /// `{"scan": {"id"}}`, a design scan the store keeps (a template authored on it names it).
     #[serde(default)]
-    pub body: DesignBody,
+    pub body: Option<DesignBody>,
+    /// A size chart (CSV text or a JSON size chart document) whose size `body_size` the curves were
+    /// drawn on (instead of `body`).
+    #[serde(default)]
+    #[schema(value_type = Option<crate::api::SizeChartInput>)]
+    pub body_chart: Option<serde_json::Value>,
+    /// The size of `body_chart` (its label).
+    #[serde(default)]
+    pub body_size: Option<String>,
     /// The panels, each as its four boundary curves in metres (bottom and top from the left curve to
     /// the right one, left and right from the bottom up; a side may be one point); panels meet along
     /// shared curves, which become their seams.
@@ -71,6 +114,8 @@ pub struct CurvesUpload {
 pub struct Authored {
     /// The stored template's name and version.
     pub template: super::store::Entry,
+    /// The body it was designed on, as the template records it.
+    pub design_body: DesignBody,
     /// The pieces after cutting (a tube is cut into front and back).
     pub pieces: Vec<String>,
     /// The girths the garment goes around and its ease there, mm (the template's `ease_mm`).
@@ -86,6 +131,15 @@ pub struct Authored {
     pub units: Units,
 }
 
+/// Where an authoring request's design body comes from.
+#[derive(Debug, Clone, PartialEq)]
+pub enum PartsBody {
+    /// Named, a chart's size, or a stored scan ([`super::edit::design_body`]).
+    Design(DesignBody),
+    /// An avatar uploaded with the garment (kept as it was uploaded).
+    Scan(StoredScan),
+}
+
 /// The parts of an authoring request.
 #[derive(Debug, Clone)]
 pub struct AuthorParts {
@@ -94,7 +148,7 @@ pub struct AuthorParts {
     /// The template's name.
     pub name: String,
     /// The design body.
-    pub body: DesignBody,
+    pub body: PartsBody,
     /// The stated units.
     pub units: Option<Units>,
     /// The options.
@@ -110,9 +164,6 @@ pub enum AuthorRequestError {
     /// No unit makes the garment garment-sized.
     #[error("the garment's size fits no unit (m, cm, mm): state `units`")]
     Units,
-    /// The design body could not be built (internal: the embedded model).
-    #[error("{0}")]
-    Body(String),
     /// Authoring failed.
     #[error(transparent)]
     Authoring(#[from] FromGarmentError),
@@ -135,24 +186,65 @@ fn value<T: serde::de::DeserializeOwned>(part: &str, data: &[u8], allowed: &str)
     })
 }
 
-/// Reads the parts `garment`, `name` and optionally `body`, `units` and
-/// `options` of a body already within the limit `max`.
+/// The size `size` of a chart (CSV text or a JSON document) as a design
+/// body, every refusal naming `chart_field` or `size_field`.
+///
+/// # Errors
+/// [`Problem`] (400): the chart's ([`super::errors::chart_problem`]), a
+/// size the chart does not have (naming those it has).
+pub fn chart_size(
+    chart: &serde_json::Value,
+    size: &str,
+    opts: &SizeChartOptions,
+    (chart_field, size_field): (&str, &str),
+) -> Result<DesignBody, Problem> {
+    let parsed: SizeChart = match chart {
+        serde_json::Value::String(csv) if csv.trim_start().starts_with('{') => parse_json(csv, opts),
+        serde_json::Value::String(csv) => parse_csv(csv, opts),
+        serde_json::Value::Object(_) => parse_json(&chart.to_string(), opts),
+        _ => {
+            return Err(Problem::bad_request("chart-type", "the chart is a JSON size chart object or CSV text")
+                .field(chart_field))
+        }
+    }
+    .map_err(|e| super::errors::chart_problem(&e).field(chart_field))?;
+    let row = parsed.rows.iter().find(|r| r.size == size).ok_or_else(|| {
+        let sizes: Vec<&str> = parsed.rows.iter().map(|r| r.size.as_str()).collect();
+        Problem::bad_request("unknown-size", format!("the chart has no size `{size}`; it has: {}", sizes.join(", ")))
+            .field(size_field)
+    })?;
+    Ok(DesignBody::ChartSize { sex: parsed.sex, row: row.clone() })
+}
+
+/// Reads the parts `garment`, `name` and optionally `body`, `body_scan`
+/// (with `body_landmarks`, `up`, `facing`), `body_chart` (with
+/// `body_size`), `units` and `options` of a body already within the limit
+/// `max`.
 ///
 /// # Errors
 /// [`Problem`] (400) naming the part: a malformed multipart body, an unknown
 /// or missing part, text that is not UTF-8, a value not allowed, options
-/// that are not the options' JSON.
-pub async fn read_author_parts(req: Request, max: usize) -> Result<AuthorParts, Problem> {
+/// that are not the options' JSON, more than one design body, a chart or
+/// size without the other, a chart the library refuses or that lacks the size.
+pub async fn read_author_parts(req: Request, max: usize, charts: SizeChartOptions) -> Result<AuthorParts, Problem> {
     let mut mp = Multipart::from_request(req, &())
         .await
         .map_err(|e| Problem::bad_request("invalid-multipart", e.body_text()).field("body"))?;
-    let (mut garment, mut name, mut body, mut units, mut options) = (None, None, DesignBody::default(), None, None);
+    let (mut garment, mut name, mut body, mut units, mut options) = (None, None, None, None, None);
+    let (mut scan, mut landmarks, mut chart, mut size) = (None, None, None, None);
+    let mut hints = FrameHints::default();
     while let Some((part, data)) = super::next_part(&mut mp, max).await? {
         match part.as_str() {
             "garment" => garment = Some(data),
             "name" => name = Some(text(&part, &data)?),
-            "body" => body = value(&part, &data, "reference, makehuman-base")?,
+            "body" => body = Some(value::<DesignBody>(&part, &data, "reference, makehuman-base")?),
+            "body_scan" => scan = Some(data),
+            "body_landmarks" => landmarks = Some(text(&part, &data)?),
+            "body_chart" => chart = Some(text(&part, &data)?),
+            "body_size" => size = Some(text(&part, &data)?),
             "units" => units = Some(value(&part, &data, "m, cm, mm")?),
+            "up" => hints.up = Some(value(&part, &data, "+y, +z")?),
+            "facing" => hints.facing = Some(value(&part, &data, "+x, -x, +y, -y, +z, -z")?),
             "options" => {
                 let t = text(&part, &data)?;
                 options = Some(serde_json::from_str::<GarmentOptions>(&t).map_err(|e| {
@@ -166,25 +258,104 @@ pub async fn read_author_parts(req: Request, max: usize) -> Result<AuthorParts, 
         Problem::bad_request("missing-part", "the `garment` part (GLB or OBJ) is missing").field("garment")
     })?;
     let name = name.ok_or_else(|| Problem::bad_request("missing-part", "the `name` part is missing").field("name"))?;
+    let given: Vec<&str> = [("body", body.is_some()), ("body_scan", scan.is_some()), ("body_chart", chart.is_some())]
+        .into_iter()
+        .filter_map(|(n, g)| g.then_some(n))
+        .collect();
+    if given.len() > 1 {
+        return Err(Problem::bad_request(
+            "conflicting-parts",
+            format!("one design body, not {}: `{}`", given.len(), given.join("`, `")),
+        )
+        .field(given[1]));
+    }
+    let lone = |part: &str, needs: &str| {
+        Problem::bad_request("missing-part", format!("`{part}` comes with `{needs}`")).field(needs)
+    };
+    if landmarks.is_some() && scan.is_none() {
+        return Err(lone("body_landmarks", "body_scan"));
+    }
+    if (hints.up.is_some() || hints.facing.is_some()) && scan.is_none() {
+        return Err(lone(if hints.up.is_some() { "up" } else { "facing" }, "body_scan"));
+    }
+    let body = match (scan, chart, size) {
+        (Some(glb), _, _) => {
+            hints.units = units;
+            PartsBody::Scan(StoredScan { glb: glb.to_vec(), landmarks, hints })
+        }
+        (None, Some(c), Some(sz)) => {
+            PartsBody::Design(chart_size(&serde_json::Value::String(c), &sz, &charts, ("body_chart", "body_size"))?)
+        }
+        (None, Some(_), None) => return Err(lone("body_chart", "body_size")),
+        (None, None, Some(_)) => return Err(lone("body_size", "body_chart")),
+        (None, None, None) => PartsBody::Design(body.unwrap_or_default()),
+    };
     Ok(AuthorParts { garment, name, body, units, options: options.unwrap_or_default() })
 }
 
-/// Authors the template (not yet stored): the garment read, scaled to
-/// metres, authored on its design body.
+/// Authors the template (not yet stored): the garment read, brought into
+/// the body frame (scaled to metres; with an avatar, as the avatar is),
+/// authored on its design body. An uploaded avatar is kept in the store
+/// first (module docs).
 ///
 /// # Errors
-/// [`AuthorRequestError`].
-pub fn author(parts: &AuthorParts) -> Result<(Template, Authored), AuthorRequestError> {
+/// [`Problem`]: the garment's, the design body's, the authoring's.
+pub fn author(s: &AppState, parts: &AuthorParts) -> Result<(Template, Authored), Problem> {
+    match &parts.body {
+        PartsBody::Design(which) => {
+            let body = super::edit::design_body(s, which)?;
+            Ok(author_on(parts, &body, which.clone(), None)?)
+        }
+        PartsBody::Scan(scan) => {
+            let read = super::edit::read_design_scan(s, scan)?;
+            let header = serde_json::to_vec(&(&scan.landmarks, &scan.hints)).map_err(|e| {
+                tracing::error!(error = %e, "design scan header");
+                Problem::internal()
+            })?;
+            let id = content_id(&[b"design-scan", &header, &scan.glb]);
+            let frame = read.scan.frame;
+            let authored = author_on(parts, &read.body, DesignBody::Scan { id: id.clone() }, Some(frame))?;
+            s.0.store.put_scan(&id, scan)?;
+            s.0.design_bodies.keep(format!("scan:{id}"), Arc::new(read.body));
+            Ok(authored)
+        }
+    }
+}
+
+/// [`author`] on a design body already built, recorded as `which`: the
+/// garment in the body frame (`scan` `None`: in metres or the stated or
+/// found units), or in the scan's own axes and units, which the scan's
+/// frame ([`FrameReport::transform`]) brings into it. What `grade3d
+/// author` runs.
+///
+/// # Errors
+/// [`AuthorRequestError`]: the garment's, its units', the authoring's.
+pub fn author_on(
+    parts: &AuthorParts,
+    body: &FeatureBody,
+    which: DesignBody,
+    scan: Option<FrameReport>,
+) -> Result<(Template, Authored), AuthorRequestError> {
     let pieces = read_garment(&parts.garment, &GltfReadOptions::default())?;
-    let units = match parts.units {
-        Some(u) => u,
-        None => detect_units(&pieces).ok_or(AuthorRequestError::Units)?,
+    let (pieces, units) = match scan {
+        Some(frame) => {
+            let to_body = frame.transform();
+            let pieces = pieces
+                .into_iter()
+                .map(|p| PanelMesh { positions: p.positions.iter().map(|&q| to_body.apply(q)).collect(), ..p })
+                .collect();
+            (pieces, frame.units)
+        }
+        None => {
+            let units = match parts.units {
+                Some(u) => u,
+                None => detect_units(&pieces).ok_or(AuthorRequestError::Units)?,
+            };
+            (scaled(pieces, units.metres()), units)
+        }
     };
-    let pieces = scaled(pieces, units.metres());
-    // the process's copy of the design body (built once, shared with sketch edits)
-    let body = super::edit::design_body(parts.body).map_err(AuthorRequestError::Body)?;
     let a = author_from_garment(&parts.name, &pieces, body, &parts.options)?;
-    Ok(stored(a, parts.body, units))
+    Ok(stored(a, which, units))
 }
 
 /// The template as stored (it records the body it was designed on: sketch
@@ -192,6 +363,7 @@ pub fn author(parts: &AuthorParts) -> Result<(Template, Authored), AuthorRequest
 fn stored(a: crate::template::from_garment::Authored, body: DesignBody, units: Units) -> (Template, Authored) {
     let report = Authored {
         template: super::store::Entry { name: a.template.name.clone(), version: a.template.version },
+        design_body: body.clone(),
         pieces: a.pieces,
         ease_mm: a.girths,
         unmapped: a.unmapped,
@@ -207,12 +379,31 @@ fn stored(a: crate::template::from_garment::Authored, body: DesignBody, units: U
 /// what `POST /v1/templates/from-curves` runs.
 ///
 /// # Errors
-/// [`AuthorRequestError`].
-pub fn author_curves(input: &CurvesUpload) -> Result<(Template, Authored), AuthorRequestError> {
-    let pieces = panels_from_curves(&input.panels, &input.curves)?;
-    let body = super::edit::design_body(input.body).map_err(AuthorRequestError::Body)?;
-    let a = author_from_garment(&input.name, &pieces, body, &input.options)?;
-    Ok(stored(a, input.body, Units::Metres))
+/// [`Problem`]: the design body's (one of `body` and `body_chart`, the
+/// chart with its size), the curves', the authoring's.
+pub fn author_curves(
+    s: &AppState,
+    input: &CurvesUpload,
+    charts: &SizeChartOptions,
+) -> Result<(Template, Authored), Problem> {
+    let which = match (&input.body, &input.body_chart, &input.body_size) {
+        (Some(_), Some(_), _) => {
+            return Err(Problem::bad_request("conflicting-parts", "one design body: `body` or `body_chart`, not both")
+                .field("body_chart"))
+        }
+        (_, Some(chart), Some(size)) => chart_size(chart, size, charts, ("body_chart", "body_size"))?,
+        (_, Some(_), None) => {
+            return Err(Problem::bad_request("missing-part", "`body_chart` comes with `body_size`").field("body_size"))
+        }
+        (_, None, Some(_)) => {
+            return Err(Problem::bad_request("missing-part", "`body_size` comes with `body_chart`").field("body_chart"))
+        }
+        (body, None, None) => body.clone().unwrap_or_default(),
+    };
+    let pieces = panels_from_curves(&input.panels, &input.curves).map_err(AuthorRequestError::from)?;
+    let body = super::edit::design_body(s, &which)?;
+    let a = author_from_garment(&input.name, &pieces, &body, &input.options).map_err(AuthorRequestError::from)?;
+    Ok(stored(a, which, Units::Metres))
 }
 
 #[cfg(test)]

@@ -18,7 +18,7 @@
 //! `errors.rs`), a write that lost the race (409).
 
 use std::collections::BTreeMap;
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
 
 use serde::{Deserialize, Serialize};
 
@@ -28,26 +28,138 @@ use crate::geom::mesh::TriMesh;
 use crate::io::gltf::write_glb;
 use crate::problem::Problem;
 use crate::results::{content_id, Stored};
-use crate::store::Entry;
+use crate::store::{Entry, StoredScan};
 use crate::template::edit::{apply_edit, EditOptions, Resolution, SketchEdit};
 use crate::template::from_garment::DesignBody;
 use crate::work::Artefact;
 use crate::AppState;
 
-/// The feature model of a design body, built once per process.
+/// Most chart-size and scan design bodies kept in memory (count): the
+/// last ones resolved; the built-in bodies are kept for the process.
+const KEPT_DESIGN_BODIES: usize = 4;
+
+/// The design bodies resolved from charts and stored scans, the newest
+/// last (at most [`KEPT_DESIGN_BODIES`]).
+#[derive(Debug, Default)]
+pub struct DesignBodies(std::sync::Mutex<Vec<(String, Arc<FeatureBody>)>>);
+
+impl DesignBodies {
+    fn get(&self, key: &str) -> Option<Arc<FeatureBody>> {
+        let kept = self.0.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        kept.iter().find(|(k, _)| k == key).map(|(_, b)| b.clone())
+    }
+
+    /// Keeps `body` under `key`, dropping the oldest beyond the bound.
+    pub fn keep(&self, key: String, body: Arc<FeatureBody>) {
+        let mut kept = self.0.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        kept.retain(|(k, _)| *k != key);
+        kept.push((key, body));
+        let excess = kept.len().saturating_sub(KEPT_DESIGN_BODIES);
+        kept.drain(..excess);
+    }
+}
+
+/// The built-in design bodies' feature models, built once per process.
 ///
 /// # Errors
 /// The build's error, as text (the embedded model: never a request's error).
-pub fn design_body(which: DesignBody) -> Result<&'static FeatureBody, String> {
-    static REFERENCE: OnceLock<Result<FeatureBody, String>> = OnceLock::new();
-    static MAKEHUMAN_BASE: OnceLock<Result<FeatureBody, String>> = OnceLock::new();
+fn builtin_body(which: &DesignBody) -> Result<Arc<FeatureBody>, String> {
+    static REFERENCE: OnceLock<Result<Arc<FeatureBody>, String>> = OnceLock::new();
+    static MAKEHUMAN_BASE: OnceLock<Result<Arc<FeatureBody>, String>> = OnceLock::new();
     let cell = match which {
-        DesignBody::Reference => &REFERENCE,
         DesignBody::MakehumanBase => &MAKEHUMAN_BASE,
+        _ => &REFERENCE,
     };
-    cell.get_or_init(|| crate::template::from_garment::design_body(which).map_err(|e| e.to_string()))
-        .as_ref()
+    cell.get_or_init(|| crate::template::from_garment::design_body(which).map(Arc::new).map_err(|e| e.to_string()))
+        .clone()
         .map_err(|e| format!("the design body {which:?}: {e}"))
+}
+
+/// The feature model of the reference body (built once per process).
+///
+/// # Errors
+/// The build's error, as text.
+pub fn reference_body() -> Result<Arc<FeatureBody>, String> {
+    builtin_body(&DesignBody::Reference)
+}
+
+/// `p` naming `to` where it named `from`: a scan or chart read for a design
+/// body is refused by the field of the request that gave it.
+fn renamed(mut p: Problem, renames: &[(&str, &str)]) -> Problem {
+    if let Some(f) = p.field.as_mut() {
+        if let Some((_, to)) = renames.iter().find(|(from, _)| f == from) {
+            *f = (*to).to_owned();
+        }
+    }
+    p
+}
+
+/// A scan made into a design body: read as any scan is
+/// ([`crate::work::read_body`]), its problems naming the request's
+/// `body_scan` and `body_landmarks`.
+///
+/// # Errors
+/// [`Problem`]: the scan's and its landmarks' (4xx), the embedded model's (500).
+pub fn read_design_scan(s: &AppState, scan: &StoredScan) -> Result<crate::work::ReadBody, Problem> {
+    let opts = crate::work::WorkOptions { max_scan_vertices: s.0.cfg.max_scan_vertices, ..Default::default() };
+    let input = crate::work::BodyInput {
+        name: "body_scan",
+        glb: &scan.glb,
+        landmarks: scan.landmarks.as_deref(),
+        hints: scan.hints,
+    };
+    crate::work::read_body(&input, &opts)
+        .map_err(|e| renamed(Problem::from(e), &[("scan", "body_scan"), ("landmarks", "body_landmarks")]))
+}
+
+/// The feature model of a design body: a built-in one built once per
+/// process; a chart size fitted, a stored scan read from the store — each
+/// kept among the last [`KEPT_DESIGN_BODIES`].
+///
+/// # Errors
+/// [`Problem`]: a chart size whose mannequin cannot be fitted (422, field
+/// `body_chart`); a scan the store does not hold (422, `body`) or that
+/// cannot be read (the scan's problems, `body_scan`); the store's or the
+/// embedded model's failure (500).
+pub fn design_body(s: &AppState, which: &DesignBody) -> Result<Arc<FeatureBody>, Problem> {
+    let internal = |e: &dyn std::fmt::Display| {
+        tracing::error!(error = %e, "design body");
+        Problem::internal()
+    };
+    let key = match which {
+        DesignBody::Reference | DesignBody::MakehumanBase => return builtin_body(which).map_err(|e| internal(&e)),
+        DesignBody::Scan { id } => format!("scan:{id}"),
+        DesignBody::ChartSize { .. } => {
+            content_id(&[b"chart-size", serde_json::to_string(which).map_err(|e| internal(&e))?.as_bytes()])
+        }
+    };
+    if let Some(body) = s.0.design_bodies.get(&key) {
+        return Ok(body);
+    }
+    let body = match which {
+        DesignBody::ChartSize { sex, row } => {
+            let model = crate::mannequin::model::BodyModel::embedded().map_err(|e| internal(&e))?;
+            crate::mannequin::fit::fit_size(model, row, &crate::mannequin::fit::FitOptions::for_sex(*sex))
+                .map_err(|source| {
+                    renamed(
+                        Problem::from(crate::work::WorkError::Fit { size: row.size.clone(), source }),
+                        &[("chart", "body_chart")],
+                    )
+                })?
+                .body
+        }
+        DesignBody::Scan { id } => {
+            let scan = s.0.store.get_scan(id)?.ok_or_else(|| {
+                Problem::unprocessable("design-body-unknown-scan", format!("no stored design scan `{id}`"))
+                    .field("body")
+            })?;
+            read_design_scan(s, &scan)?.body
+        }
+        _ => return builtin_body(which).map_err(|e| internal(&e)),
+    };
+    let body = Arc::new(body);
+    s.0.design_bodies.keep(key, body.clone());
+    Ok(body)
 }
 
 /// What an edit did (the report of its preview's result, too).
@@ -108,12 +220,9 @@ fn glb(mesh: &TriMesh) -> Result<Vec<u8>, Problem> {
 /// that cannot be written (500).
 pub fn edit(s: &AppState, name: &str, request: &SketchEdit) -> Result<TemplateEdited, Problem> {
     let (based_on, t) = s.0.store.get(name, None)?;
-    let which = t.design_body.unwrap_or_default();
-    let body = design_body(which).map_err(|e| {
-        tracing::error!(error = %e, "design body");
-        Problem::internal()
-    })?;
-    let edited = apply_edit(&t, body, request, &EditOptions::default())?;
+    let which = t.design_body.clone().unwrap_or_default();
+    let body = design_body(s, &which)?;
+    let edited = apply_edit(&t, &body, request, &EditOptions::default())?;
     let template = s.0.store.put_edit(&edited.template, based_on)?;
     let (_, json) = s.0.store.get_json(name, Some(template.version))?;
     let document: serde_json::Value = serde_json::from_str(&json).map_err(|e| {
@@ -129,7 +238,7 @@ pub fn edit(s: &AppState, name: &str, request: &SketchEdit) -> Result<TemplateEd
     let report = EditReport {
         template,
         based_on,
-        design_body: which,
+        design_body: which.clone(),
         moved_nodes: edited.moved_nodes,
         edited_edges: edited.edited_edges,
         resolved: edited.resolved,
@@ -247,7 +356,7 @@ mod tests {
         let (_, headers, live) = call(&s, get("/v1/templates/straight-skirt")).await;
         assert_eq!((headers["x-template-version"].to_str().unwrap(), json_of(&live)), ("2", answer.document.clone()));
         // the node moved 20 mm along +z on the design body
-        let body = design_body(DesignBody::Reference).unwrap();
+        let body = &*builtin_body(&DesignBody::Reference).unwrap();
         let (v1, v2) = (
             s.0.store.get("straight-skirt", Some(1)).unwrap().1,
             Template::from_json(&String::from_utf8(stored).unwrap()).unwrap(),
@@ -314,8 +423,8 @@ mod tests {
         assert_eq!(edited.design_body, Some(DesignBody::MakehumanBase), "kept by the edit");
         // 20 mm along +z on the base mesh, exactly; not so on the reference body
         let at = |t: &Template, which| {
-            let body = design_body(which).unwrap();
-            decode(t, body, t.defaults.relocation).unwrap().positions[17]
+            let body = builtin_body(&which).unwrap();
+            decode(t, &body, t.defaults.relocation).unwrap().positions[17]
         };
         let moved = at(&edited, DesignBody::MakehumanBase) - at(&skirt, DesignBody::MakehumanBase);
         assert!((moved - glam::DVec3::Z * 0.02).length() < 1e-9, "{moved}");
@@ -327,7 +436,7 @@ mod tests {
     /// The skirt's front hem edge 17–18 in the front view at 1 mm per pixel, and a stroke over it
     /// with an X in its middle.
     fn looped_stroke() -> Value {
-        let body = design_body(DesignBody::Reference).unwrap();
+        let body = &*builtin_body(&DesignBody::Reference).unwrap();
         let skirt = crate::template::library::builtin().unwrap().remove(0);
         let m = decode(&skirt, body, skirt.defaults.relocation).unwrap();
         let view = SketchView { view: CanonicalView::Front, metres_per_px: 0.001, origin_px: [500.0, 500.0] };

@@ -72,7 +72,6 @@ impl From<AuthorRequestError> for Problem {
                 }
             },
             AuthorRequestError::Units => Problem::unprocessable("garment-units", detail).field("units"),
-            AuthorRequestError::Body(_) => internal(&detail),
             AuthorRequestError::Authoring(a) => match a {
                 FromGarmentError::Panels(_) => Problem::unprocessable("garment-pieces", detail).field("garment"),
                 FromGarmentError::NotADisc { .. } => {

@@ -179,6 +179,8 @@ pub struct Inner {
     pub obstacles: Arc<ObstacleCache>,
     /// The templates' blocks ([`blocks`]), made as the service starts.
     pub blocks: Arc<blocks::BlockCache>,
+    /// Design bodies from charts and stored scans ([`edit::design_body`]).
+    pub design_bodies: edit::DesignBodies,
     /// Synchronous results.
     pub results: ResultCache,
     /// The bounded pool.
@@ -226,6 +228,7 @@ impl AppState {
             renderer: OnceLock::new(),
             obstacles: Arc::new(ObstacleCache::new(ObstacleCacheOptions::default())),
             blocks: Default::default(),
+            design_bodies: Default::default(),
             pool,
             metrics: Metrics::new(),
             pending_jobs: Default::default(),
@@ -703,7 +706,8 @@ async fn create_template_from_garment(
 ) -> Result<Response, Problem> {
     if !media_is(&headers, "multipart/form-data") {
         return Err(unsupported_media(
-            "multipart/form-data with parts garment and name, optionally body, units, options",
+            "multipart/form-data with parts garment and name, optionally body (or body_scan with \
+             body_landmarks, up, facing; or body_chart with body_size), units, options",
         ));
     }
     let (parts, body) = req.into_parts();
@@ -711,16 +715,17 @@ async fn create_template_from_garment(
     let bytes = body_bytes(&s, &headers, body).await?;
     check_key(&s, &headers, true)?;
     let req = Request::from_parts(parts, axum::body::Body::from(bytes));
-    let input = author::read_author_parts(req, s.0.cfg.max_body_bytes).await?;
+    let input = author::read_author_parts(req, s.0.cfg.max_body_bytes, s.chart_options()).await?;
     valid_name(&input.name)?;
-    store_authored(&s, move || author::author(&input)).await
+    let me = s.clone();
+    store_authored(&s, move || author::author(&me, &input)).await
 }
 
 /// Runs an authoring on the pool and stores its template as version 1: 201
 /// with its `Location` and the authoring's report.
 async fn store_authored(
     s: &AppState,
-    run: impl FnOnce() -> Result<(Template, author::Authored), author::AuthorRequestError> + Send + 'static,
+    run: impl FnOnce() -> Result<(Template, author::Authored), Problem> + Send + 'static,
 ) -> Result<Response, Problem> {
     let me = s.clone();
     let report =
@@ -758,7 +763,8 @@ async fn create_template_from_curves(
     check_key(&s, &headers, true)?;
     let input: author::CurvesUpload = parse_json_body(&bytes)?;
     valid_name(&input.name)?;
-    store_authored(&s, move || author::author_curves(&input)).await
+    let (me, charts) = (s.clone(), s.chart_options());
+    store_authored(&s, move || author::author_curves(&me, &input, &charts)).await
 }
 
 /// Replace a template (a new version; earlier versions stay readable).

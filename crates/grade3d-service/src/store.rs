@@ -8,7 +8,10 @@
 //! Layout: `versions: (name, version) → template JSON` keeps every
 //! version; `current: name → version` points at the live one; `meta`
 //! records that the built-in templates were seeded (so a library whose
-//! built-ins were deleted stays that way after a restart).
+//! built-ins were deleted stays that way after a restart); `bodies:
+//! content id → scan` keeps the scans templates were designed on
+//! ([`StoredScan`]; issue #18: a template authored on an avatar is edited
+//! there), written before the template that names them.
 //!
 //! Every template is validated ([`Template::from_json`]) before it is
 //! written. Failure modes: [`StoreError`].
@@ -22,7 +25,49 @@ use crate::template::format::{Template, TemplateError};
 const VERSIONS: TableDefinition<(&str, u32), &[u8]> = TableDefinition::new("versions");
 const CURRENT: TableDefinition<&str, u32> = TableDefinition::new("current");
 const META: TableDefinition<&str, u64> = TableDefinition::new("meta");
+const BODIES: TableDefinition<&str, &[u8]> = TableDefinition::new("bodies");
 const SEEDED: &str = "seeded_builtins";
+
+/// A scan kept as a design body: what was uploaded, so that it is read
+/// again exactly as it was (repaired, framed, landmarked, derived).
+#[derive(Debug, Clone, PartialEq)]
+pub struct StoredScan {
+    /// The GLB.
+    pub glb: Vec<u8>,
+    /// Its landmarks JSON, if given.
+    pub landmarks: Option<String>,
+    /// What the upload stated of its units and axes.
+    pub hints: crate::body::frame::FrameHints,
+}
+
+#[derive(serde::Serialize, serde::Deserialize)]
+struct ScanHeader {
+    landmarks: Option<String>,
+    hints: crate::body::frame::FrameHints,
+}
+
+impl StoredScan {
+    /// `u32` (little-endian) header length, the header (landmarks and
+    /// hints, JSON), the GLB.
+    fn to_bytes(&self) -> Result<Vec<u8>, StoreError> {
+        let header =
+            serde_json::to_vec(&ScanHeader { landmarks: self.landmarks.clone(), hints: self.hints }).map_err(db)?;
+        let len = u32::try_from(header.len()).map_err(db)?;
+        let mut out = Vec::with_capacity(4 + header.len() + self.glb.len());
+        out.extend_from_slice(&len.to_le_bytes());
+        out.extend_from_slice(&header);
+        out.extend_from_slice(&self.glb);
+        Ok(out)
+    }
+
+    fn from_bytes(bytes: &[u8]) -> Result<Self, StoreError> {
+        let corrupt = || StoreError::Database("a stored scan is corrupt".into());
+        let len = u32::from_le_bytes(bytes.get(..4).ok_or_else(corrupt)?.try_into().map_err(|_| corrupt())?);
+        let end = 4usize.checked_add(usize::try_from(len).map_err(|_| corrupt())?).ok_or_else(corrupt)?;
+        let header: ScanHeader = serde_json::from_slice(bytes.get(4..end).ok_or_else(corrupt)?).map_err(db)?;
+        Ok(Self { glb: bytes[end..].to_vec(), landmarks: header.landmarks, hints: header.hints })
+    }
+}
 
 /// Why a store operation failed.
 #[derive(Debug, thiserror::Error)]
@@ -229,6 +274,37 @@ impl TemplateStore {
         Ok(Entry { name: t.name, version })
     }
 
+    /// Keeps `scan` under its content id `id` (a second put of the same id
+    /// writes nothing), durably.
+    ///
+    /// # Errors
+    /// [`StoreError::Database`].
+    pub fn put_scan(&self, id: &str, scan: &StoredScan) -> Result<(), StoreError> {
+        let tx = self.db.begin_write().map_err(db)?;
+        {
+            let mut bodies = tx.open_table(BODIES).map_err(db)?;
+            if bodies.get(id).map_err(db)?.is_none() {
+                bodies.insert(id, scan.to_bytes()?.as_slice()).map_err(db)?;
+            }
+        }
+        tx.commit().map_err(db)
+    }
+
+    /// The scan kept under `id`, if any.
+    ///
+    /// # Errors
+    /// [`StoreError::Database`].
+    pub fn get_scan(&self, id: &str) -> Result<Option<StoredScan>, StoreError> {
+        let tx = self.db.begin_read().map_err(db)?;
+        let bodies = match tx.open_table(BODIES) {
+            Ok(t) => t,
+            Err(redb::TableError::TableDoesNotExist(_)) => return Ok(None),
+            Err(e) => return Err(db(e)),
+        };
+        let value = bodies.get(id).map_err(db)?;
+        value.map(|v| StoredScan::from_bytes(v.value())).transpose()
+    }
+
     /// Deletes a template (every version stays readable by number; the name is freed).
     ///
     /// # Errors
@@ -254,6 +330,28 @@ mod tests {
         let p = std::env::temp_dir().join(format!("grade3d-store-{}-{name}.redb", std::process::id()));
         let _ = std::fs::remove_file(&p);
         p
+    }
+
+    #[test]
+    fn a_design_scan_is_kept_once_and_read_back_after_a_reopen() {
+        let path = temp("scans");
+        let store = TemplateStore::open(&path, &[]).expect("open");
+        assert_eq!(store.get_scan("abc").unwrap(), None, "no table yet");
+        let scan = StoredScan {
+            glb: b"glTF\x02\0\0\0 not really".to_vec(),
+            landmarks: Some("{\"points\": {}}".into()),
+            hints: crate::body::frame::FrameHints {
+                units: Some(crate::body::frame::Units::Millimetres),
+                ..Default::default()
+            },
+        };
+        store.put_scan("abc", &scan).unwrap();
+        store.put_scan("abc", &StoredScan { glb: vec![1], landmarks: None, hints: Default::default() }).unwrap();
+        drop(store);
+        let store = TemplateStore::open(&path, &[]).expect("reopen");
+        assert_eq!(store.get_scan("abc").unwrap(), Some(scan), "the first put kept");
+        assert_eq!(store.get_scan("abd").unwrap(), None);
+        assert!(StoredScan::from_bytes(&[9, 0, 0, 0, b'{']).is_err(), "a short header is named, not a panic");
     }
 
     #[test]

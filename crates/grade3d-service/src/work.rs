@@ -321,9 +321,9 @@ impl WorkContext {
     /// `t`'s block: graded on the reference body, its darts decided there.
     /// (Why not, in words, for the log: it is never a request's error.)
     fn block_of(&self, t: &Template) -> Result<DartPlan, String> {
-        let body = crate::edit::design_body(crate::template::from_garment::DesignBody::Reference)?;
+        let body = crate::edit::reference_body()?;
         let obstacle = self.obstacle(&body.mesh, true, &mut Timer(BTreeMap::new())).map_err(|e| e.to_string())?;
-        crate::pipeline::block(t, body, obstacle.as_deref(), &self.opts.grade)
+        crate::pipeline::block(t, &body, obstacle.as_deref(), &self.opts.grade)
             .map_err(|e| format!("graded on the reference body: {e}"))
     }
 }

@@ -210,6 +210,33 @@ impl BodyFrame {
     }
 }
 
+/// The rotation taking up axis `up` (`+Y` or `+Z`) to `+Y`.
+fn upright(up: Axis) -> DMat3 {
+    match up {
+        // the columns are the images of the input's axes: (x, y, z) ↦ (x, z, −y)
+        Axis::PosZ => DMat3::from_cols(DVec3::X, DVec3::NEG_Z, DVec3::Y),
+        _ => DMat3::IDENTITY,
+    }
+}
+
+/// The rotation about `+Y` taking the horizontal axis direction `facing`
+/// to `+Z` (its entries snapped to −1, 0, 1).
+fn turn_to_face(facing: DVec3) -> DMat3 {
+    let turn = DMat3::from_rotation_y(facing.x.atan2(facing.z)).transpose();
+    DMat3::from_cols(snap(turn.x_axis), snap(turn.y_axis), snap(turn.z_axis))
+}
+
+impl FrameReport {
+    /// The transform [`body_frame`] applied to the scan it reports on
+    /// (from its units, up axis and facing): what brings anything given in
+    /// the scan's own axes and units into the body frame with it — a
+    /// garment exported with the avatar it was draped on.
+    pub fn transform(&self) -> BodyFrame {
+        let upright = upright(self.up);
+        BodyFrame { scale: self.units.metres(), rotation: turn_to_face(upright * self.facing.vector()) * upright }
+    }
+}
+
 /// What [`body_frame`] found, for the report.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct FrameReport {
@@ -359,11 +386,7 @@ pub fn body_frame(
     };
     let scale = units.metres();
     // up to +Y first; the facing below is found in that frame
-    let upright = match up {
-        // the columns are the images of the input's axes: (x, y, z) ↦ (x, z, −y)
-        Axis::PosZ => DMat3::from_cols(DVec3::X, DVec3::NEG_Z, DVec3::Y),
-        _ => DMat3::IDENTITY,
-    };
+    let upright = upright(up);
     let standing = mesh.map_positions(|p| upright * p * scale)?;
     let faces = weighted_centroids(&standing);
     let aabb = standing.aabb();
@@ -392,9 +415,7 @@ pub fn body_frame(
             sagittal * offset.signum()
         }
     };
-    // rotation about +Y taking the facing to +Z
-    let turn = DMat3::from_rotation_y(facing_body.x.atan2(facing_body.z)).transpose();
-    let turn = DMat3::from_cols(snap(turn.x_axis), snap(turn.y_axis), snap(turn.z_axis));
+    let turn = turn_to_face(facing_body);
     let rotation = turn * upright;
     let body = standing.map_positions(|p| turn * p)?;
     let faces: Vec<(DVec3, f64)> = faces.into_iter().map(|(c, a)| (turn * c, a)).collect();
@@ -469,8 +490,10 @@ mod tests {
             let rot = DMat3::from_rotation_z(turn * std::f64::consts::PI)
                 * DMat3::from_rotation_x(std::f64::consts::FRAC_PI_2);
             let scan = body.map_positions(|p| rot * p * 1000.0).expect("mesh");
-            let (out, _, r) = body_frame(&scan, &FrameHints::default(), &FrameOptions::default()).expect("frame");
+            let (out, frame, r) = body_frame(&scan, &FrameHints::default(), &FrameOptions::default()).expect("frame");
             assert_eq!((r.units, r.up, r.facing), (Units::Millimetres, Axis::PosZ, facing), "turn {turn}");
+            // the report gives back the transform (a garment exported with the scan follows it)
+            assert_eq!(r.transform(), frame, "turn {turn}");
             for (a, b) in out.positions().iter().zip(body.positions()) {
                 assert!(a.distance(*b) < 1e-9, "turn {turn}: {a} vs {b}");
             }

@@ -107,6 +107,7 @@ pub struct SizeRow {
     /// Target measurements, metres.
     pub targets: BTreeMap<MeasurementId, f64>,
     /// Columns read but not used as targets (the other figure type's waist), metres.
+    #[serde(default)]
     pub alternatives: BTreeMap<String, f64>,
 }
 

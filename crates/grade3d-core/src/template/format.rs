@@ -922,6 +922,21 @@ mod tests {
         assert!(matches!(Template::from_json(&bad), Err(TemplateError::Schema(_))), "{bad}");
         let bad = tiny().to_json().replacen("\"ease_mm\": {}", "\"ease_mm\": {}, \"design_body\": \"moon\"", 1);
         assert!(matches!(Template::from_json(&bad), Err(TemplateError::Schema(_))));
+        // a chart's size and a stored scan round-trip too; a scan without its id does not pass
+        let row = crate::mannequin::size_chart::SizeRow {
+            size: "38".into(),
+            targets: [(crate::body::measure::MeasurementId::HipGirth, 1.0)].into(),
+            alternatives: Default::default(),
+        };
+        for body in [
+            DesignBody::ChartSize { sex: crate::mannequin::size_chart::Sex::Female, row },
+            DesignBody::Scan { id: "b3f1".into() },
+        ] {
+            let t = Template { design_body: Some(body), ..tiny() };
+            assert_eq!(Template::from_json(&t.to_json()).unwrap(), t);
+        }
+        let bad = tiny().to_json().replacen("\"ease_mm\": {}", "\"ease_mm\": {}, \"design_body\": {\"scan\": {}}", 1);
+        assert!(matches!(Template::from_json(&bad), Err(TemplateError::Schema(_))), "{bad}");
     }
 
     #[test]

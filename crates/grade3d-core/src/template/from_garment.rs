@@ -117,6 +117,8 @@ use crate::geom::query::{PointGrid, SphereIndex};
 use crate::geom::simplify::{simplify, SimplifyError, SimplifyOptions};
 use crate::geom::slice::slice;
 use crate::geom::topology::UnionFind;
+use crate::mannequin::fit::{fit_size, FitOptions};
+use crate::mannequin::size_chart::{Sex, SizeRow};
 
 /// How a piece that is not a disc is cut (method, step 2).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -298,8 +300,12 @@ pub struct Authored {
     pub pieces: Vec<String>,
 }
 
-/// The body a garment was designed on, where it is one of ours.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, utoipa::ToSchema)]
+/// The body a garment was designed on: one of ours, a size of a chart, or
+/// a scan the service keeps. A template records it (sketch edits are made
+/// there, issue #18 item 3); serialised as `"reference"`,
+/// `"makehuman-base"`, `{"chart-size": {"sex": …, "row": …}}` or
+/// `{"scan": {"id": …}}`.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "kebab-case")]
 pub enum DesignBody {
     /// The reference mannequin the built-in templates are authored on
@@ -310,13 +316,33 @@ pub enum DesignBody {
     /// helper geometry and the community's clothes for it are modelled on
     /// ([`crate::mannequin::model::BodyModel::base_mesh`]).
     MakehumanBase,
+    /// One size of a size chart: the mannequin fitted to that row alone
+    /// ([`crate::mannequin::fit::fit_size`] from the base body of the
+    /// chart's sex, [`FitOptions::for_sex`]), as a brand designs on its
+    /// sample size.
+    ChartSize {
+        /// Whose body the chart describes.
+        sex: Sex,
+        /// The size's row: its label and targets, metres.
+        #[schema(value_type = Object)]
+        row: SizeRow,
+    },
+    /// A scan (an avatar exported with the garment draped on it), kept by
+    /// the service under its content id: resolved there, not here
+    /// ([`design_body`] refuses it).
+    Scan {
+        /// The stored scan's content id.
+        id: String,
+    },
 }
 
 /// The feature model of a [`DesignBody`].
 ///
 /// # Errors
-/// [`super::library::AuthorError`] (the embedded model, its landmarks or features).
-pub fn design_body(which: DesignBody) -> Result<FeatureBody, super::library::AuthorError> {
+/// [`super::library::AuthorError`] (the embedded model, its landmarks or
+/// features; a chart size that does not fit); [`super::library::AuthorError::Missing`]
+/// for [`DesignBody::Scan`], which only its store can resolve.
+pub fn design_body(which: &DesignBody) -> Result<FeatureBody, super::library::AuthorError> {
     use crate::body::derive::{derive_features, DeriveOptions};
     use crate::mannequin::landmarks::hm08_landmarks;
     use crate::mannequin::model::BodyModel;
@@ -328,6 +354,11 @@ pub fn design_body(which: DesignBody) -> Result<FeatureBody, super::library::Aut
             let lm = hm08_landmarks(model, &mesh, &Default::default())?;
             Ok(derive_features(mesh, &lm, &DeriveOptions::default())?)
         }
+        DesignBody::ChartSize { sex, row } => {
+            let model = BodyModel::embedded()?;
+            Ok(fit_size(model, row, &FitOptions::for_sex(*sex))?.body)
+        }
+        DesignBody::Scan { id } => Err(super::library::AuthorError::Missing(format!("the stored scan `{id}`"))),
     }
 }
 

@@ -68,6 +68,9 @@ pub enum AuthorError {
     /// A style authored from its garment (issue #18 item 1) could not be.
     #[error(transparent)]
     Garment(#[from] Box<super::from_garment::FromGarmentError>),
+    /// A chart size's mannequin could not be fitted (a design body).
+    #[error(transparent)]
+    Fit(#[from] crate::mannequin::fit::FitError),
 }
 
 /// The reference body templates are authored on.
