@@ -87,6 +87,7 @@ fn benches(c: &mut Criterion) {
             renderer: Some(std::sync::Arc::new(renderer)),
             obstacles: std::sync::Arc::new(ObstacleCache::new(ObstacleCacheOptions::default())),
             blocks: Default::default(),
+            design_bodies: grade3d::service::work::DesignBodyResolver::core(),
             opts: WorkOptions::default(),
         };
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/bodies");

@@ -320,6 +320,7 @@ fn grade_offline(args: &GradeArgs) -> Result<(), Box<dyn std::error::Error>> {
         renderer,
         obstacles: std::sync::Arc::new(ObstacleCache::new(ObstacleCacheOptions::default())),
         blocks: Default::default(),
+        design_bodies: grade3d::service::work::DesignBodyResolver::core(),
         opts: WorkOptions::default(),
     };
     let bar = indicatif::ProgressBar::new(0);

@@ -223,6 +223,7 @@ fn twenty_scans_as_they_come_are_graded_without_landmarks() {
         renderer: Some(Arc::new(renderer)),
         obstacles: Arc::new(ObstacleCache::new(ObstacleCacheOptions::default())),
         blocks: Default::default(),
+        design_bodies: grade3d::service::work::DesignBodyResolver::core(),
         opts: WorkOptions::default(),
     };
     let templates = builtin().unwrap();

@@ -314,6 +314,12 @@ impl AppState {
             renderer,
             obstacles: Arc::clone(&self.0.obstacles),
             blocks: Arc::clone(&self.0.blocks),
+            design_bodies: {
+                let me = self.clone();
+                work::DesignBodyResolver(Arc::new(move |which| {
+                    edit::design_body(&me, which).map_err(|p| format!("{}: {}", p.kind, p.detail))
+                }))
+            },
             opts: WorkOptions { max_scan_vertices: self.0.cfg.max_scan_vertices, ..WorkOptions::default() },
         })
     }

@@ -61,6 +61,7 @@ use crate::pipeline::{grade_with_darts, GradeOptions, Graded, PipelineError};
 use crate::report::{BodiesReport, BodyReport, Flow, MannequinReport, Report, SizeChartReport, SizeReport};
 use crate::store::Entry;
 use crate::template::format::Template;
+use crate::template::from_garment::DesignBody;
 use grade3d_core::report::{fit_report, FitReport, FitReportError, FitReportOptions, FitStep, GarmentReport};
 use grade3d_core::scan::{scan_body, ScanError, ScanOptions, ScanReport};
 
@@ -230,6 +231,36 @@ impl Default for WorkOptions {
     }
 }
 
+/// Builds a template's design body for its block ([`WorkContext::blocks`]):
+/// the service resolves every kind ([`crate::edit::design_body`], a stored
+/// avatar from its store); [`DesignBodyResolver::core`] all but a stored
+/// avatar.
+#[derive(Clone)]
+pub struct DesignBodyResolver(
+    /// The resolution; its error in words, for the log.
+    pub Arc<ResolveDesignBody>,
+);
+
+/// What a [`DesignBodyResolver`] runs.
+pub type ResolveDesignBody = dyn Fn(&DesignBody) -> Result<Arc<FeatureBody>, String> + Send + Sync;
+
+impl DesignBodyResolver {
+    /// The core's ([`crate::template::from_garment::design_body`]): a stored
+    /// avatar is not reachable (`grade3d grade` has no store).
+    pub fn core() -> Self {
+        Self(Arc::new(|which: &DesignBody| match which {
+            DesignBody::Reference => crate::edit::reference_body(),
+            _ => crate::template::from_garment::design_body(which).map(Arc::new).map_err(|e| e.to_string()),
+        }))
+    }
+}
+
+impl std::fmt::Debug for DesignBodyResolver {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("DesignBodyResolver")
+    }
+}
+
 /// What the flows share: the depth-map renderer (optional: without one,
 /// grading runs without collision avoidance and the report says so) and the per-body
 /// obstacle cache (used for mannequins only: scans are personal data and
@@ -242,6 +273,8 @@ pub struct WorkContext {
     pub obstacles: Arc<ObstacleCache>,
     /// The templates' blocks ([`crate::blocks`]).
     pub blocks: Arc<BlockCache>,
+    /// The templates' design bodies, their blocks' bodies.
+    pub design_bodies: DesignBodyResolver,
     /// Knobs.
     pub opts: WorkOptions,
 }
@@ -318,13 +351,17 @@ impl WorkContext {
             .collect()
     }
 
-    /// `t`'s block: graded on the reference body, its darts decided there.
-    /// (Why not, in words, for the log: it is never a request's error.)
+    /// `t`'s block: graded on its design body (the reference body unless
+    /// it names another), its darts decided there. A stored avatar's
+    /// obstacle is not cached (the block is). (Why not, in words, for the
+    /// log: it is never a request's error.)
     fn block_of(&self, t: &Template) -> Result<DartPlan, String> {
-        let body = crate::edit::reference_body()?;
-        let obstacle = self.obstacle(&body.mesh, true, &mut Timer(BTreeMap::new())).map_err(|e| e.to_string())?;
+        let which = t.design_body.clone().unwrap_or_default();
+        let body = (self.design_bodies.0)(&which)?;
+        let cache = !matches!(which, DesignBody::Scan { .. });
+        let obstacle = self.obstacle(&body.mesh, cache, &mut Timer(BTreeMap::new())).map_err(|e| e.to_string())?;
         crate::pipeline::block(t, &body, obstacle.as_deref(), &self.opts.grade)
-            .map_err(|e| format!("graded on the reference body: {e}"))
+            .map_err(|e| format!("graded on its design body {which:?}: {e}"))
     }
 }
 
@@ -962,5 +999,31 @@ mod tests {
         assert_eq!(p.status, 500);
         assert!(!p.detail.contains("key must be a string"), "{}", p.detail);
         assert_eq!(json_bytes("ok", &serde_json::json!({"a": 1}), false).unwrap(), br#"{"a":1}"#);
+    }
+
+    #[test]
+    fn a_templates_block_is_decided_on_its_design_body() {
+        let renderer = Renderer::new(crate::collide::render::RendererChoice::Auto).expect("a renderer");
+        let asked = Arc::new(std::sync::Mutex::new(Vec::new()));
+        let log = asked.clone();
+        let ctx = WorkContext {
+            renderer: Some(Arc::new(renderer)),
+            obstacles: Arc::new(ObstacleCache::new(Default::default())),
+            blocks: Default::default(),
+            design_bodies: DesignBodyResolver(Arc::new(move |which: &DesignBody| {
+                log.lock().unwrap().push(which.clone());
+                (DesignBodyResolver::core().0)(which)
+            })),
+            opts: WorkOptions::default(),
+        };
+        let mut skirt = crate::template::library::builtin().unwrap().remove(0);
+        skirt.design_body = Some(DesignBody::MakehumanBase);
+        let mut unknown = skirt.clone();
+        unknown.name = "on-an-avatar".into();
+        unknown.design_body = Some(DesignBody::Scan { id: "gone".into() });
+        let blocks = ctx.blocks(&[skirt, unknown]);
+        assert!(blocks[0].is_some(), "the block on MakeHuman's base mesh");
+        assert!(blocks[1].is_none(), "no block where the design body cannot be had (logged, not an error)");
+        assert_eq!(*asked.lock().unwrap(), [DesignBody::MakehumanBase, DesignBody::Scan { id: "gone".into() }]);
     }
 }
