@@ -51,6 +51,7 @@ fn main() {
         name: "skirt".into(),
         positions: m.positions().to_vec(),
         triangles: m.triangles().iter().map(|t| t.map(|v| v.0)).collect(),
+        uv: Vec::new(),
     };
     let t = match std::env::var("TEMPLATE") {
         Ok(name) if name == "live:shift-dress" => {

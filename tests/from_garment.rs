@@ -562,3 +562,65 @@ fn drawn_styles_round_trip_and_the_a_line_skirt_grades() {
     failures.extend(b.failures);
     assert!(failures.is_empty(), "{} failures:\n{}", failures.len(), failures.join("\n"));
 }
+
+/// Issue #18 item 1: a piece's grain comes from its texture coordinates,
+/// the pattern layout CLO3D, Browzwear and Marvelous Designer export (the
+/// grain along `v`). Planted answers: the A-line skirt drawn on the
+/// reference body, its pieces laid out as their front view (`u` across,
+/// `v` up) and as that layout turned by 45° (a bias cut). The template's
+/// grain runs within 10° of the layout's on the surface in both, and in the
+/// front view at 0° and 45° (± 10°) from the vertical; without the layout
+/// (or asked not to read it) the grain is the body's vertical.
+#[test]
+fn a_pieces_grain_comes_from_its_pattern_layout() {
+    use grade3d::template::drawn::{a_line_skirt_surface, garment_options, ALineOptions};
+    use grade3d::template::from_garment::GrainSource;
+    let body = grade3d::template::library::reference_body().unwrap();
+    let pieces = a_line_skirt_surface(&body, &ALineOptions::default()).unwrap();
+    let laid_out = |turn_deg: f64| {
+        let (c, s) = (turn_deg.to_radians().cos(), turn_deg.to_radians().sin());
+        let mut out = pieces.clone();
+        for p in &mut out {
+            // seen from outside: the back's layout is its view from behind
+            let across = if p.name == "back" { -1.0 } else { 1.0 };
+            p.uv = p
+                .positions
+                .iter()
+                .map(|q| {
+                    let (u, v) = (across * q.x, q.y);
+                    glam::DVec2::new(c * u - s * v, s * u + c * v)
+                })
+                .collect();
+        }
+        out
+    };
+    let grain_of = |a: &Authored, piece: &str| {
+        let panel = a.template.panels.iter().find(|p| p.name == piece).unwrap();
+        let (from, to) = (panel.grain.from as usize, panel.grain.to as usize);
+        let d = glam::DVec3::from_array(a.template.nodes[to].reference)
+            - glam::DVec3::from_array(a.template.nodes[from].reference);
+        // in the front view, the plane the layout was taken from
+        d.x.abs().atan2(d.y.abs()).to_degrees()
+    };
+    for (turn, from_vertical) in [(0.0, 0.0), (45.0, 45.0)] {
+        let a = author_from_garment("laid-out", &laid_out(turn), &body, &garment_options()).unwrap();
+        for piece in ["front", "back"] {
+            let g = &a.grains[piece];
+            assert_eq!(g.source, GrainSource::Uv, "{piece} at {turn}°");
+            assert!(g.deviation_deg < 10.0, "{piece} at {turn}°: the pair runs {:.1}° off", g.deviation_deg);
+            let angle = grain_of(&a, piece);
+            eprintln!("{piece}, layout turned {turn}°: grain {angle:.1}° from vertical, {:.1}° off", g.deviation_deg);
+            assert!((angle - from_vertical).abs() < 10.0, "{piece} at {turn}°: {angle:.1}° from vertical");
+        }
+    }
+    let ignored = GarmentOptions { grain_from_uv: false, ..garment_options() };
+    for (a, why) in [
+        (author_from_garment("plain", &pieces, &body, &garment_options()).unwrap(), "no layout"),
+        (author_from_garment("ignored", &laid_out(45.0), &body, &ignored).unwrap(), "layout not read"),
+    ] {
+        for piece in ["front", "back"] {
+            assert_eq!(a.grains[piece].source, GrainSource::Vertical, "{why}");
+            assert!(grain_of(&a, piece) < 10.0, "{why}: {piece}");
+        }
+    }
+}

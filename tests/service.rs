@@ -498,6 +498,8 @@ fn a_template_is_authored_on_an_avatar_and_on_a_chart_size() {
     assert_eq!(r.status, 201, "{}", r.text());
     let j = r.json();
     assert_eq!(j["units"], "mm", "{j}");
+    // no texture coordinates in the file: the grain is the body's vertical
+    assert_eq!(j["grains"]["front"]["source"], "vertical", "{j}");
     let id = j["design_body"]["scan"]["id"].as_str().expect("a stored scan").to_owned();
     let hip = j["ease_mm"]["hip"].as_f64().unwrap();
     // the same body, read from the avatar: the same ease but for rounding

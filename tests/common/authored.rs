@@ -47,5 +47,6 @@ pub fn garment(name: &str) -> PanelMesh {
         name: name.trim_start_matches("helper-").to_owned(),
         positions: m.positions().to_vec(),
         triangles: m.triangles().iter().map(|t| t.map(|v| v.0)).collect(),
+        uv: Vec::new(),
     }
 }

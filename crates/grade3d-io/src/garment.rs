@@ -73,7 +73,7 @@ pub fn read_garment(bytes: &[u8], opts: &GltfReadOptions) -> Result<Vec<PanelMes
                         }
                     })
                     .collect::<Result<Vec<_>, _>>()?;
-                Ok(PanelMesh { name: p.name.clone(), positions: p.positions.clone(), triangles })
+                Ok(PanelMesh { name: p.name.clone(), positions: p.positions.clone(), triangles, uv: p.uv.clone() })
             })
             .collect(),
         GarmentFormat::Obj => {

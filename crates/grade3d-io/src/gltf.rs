@@ -70,7 +70,7 @@ use std::collections::HashMap;
 
 use base64::engine::{DecodePaddingMode, GeneralPurpose, GeneralPurposeConfig};
 use base64::Engine as _;
-use glam::{DMat4, DQuat, DVec3, DVec4};
+use glam::{DMat4, DQuat, DVec2, DVec3, DVec4};
 use gltf_json::accessor::{ComponentType, GenericComponentType, Type};
 use gltf_json::mesh::{Mode, Semantic};
 use gltf_json::validation::Checked;
@@ -351,6 +351,18 @@ pub enum GltfError {
         /// The vertex within the accessor.
         vertex: usize,
     },
+    /// A texture coordinate is NaN or infinite.
+    #[error("mesh {mesh} primitive {primitive}: TEXCOORD_0 accessor {accessor} vertex {vertex} is not finite")]
+    NonFiniteTexCoord {
+        /// The mesh index.
+        mesh: usize,
+        /// The primitive index within the mesh.
+        primitive: usize,
+        /// The `TEXCOORD_0` accessor.
+        accessor: usize,
+        /// The vertex within the accessor.
+        vertex: usize,
+    },
     /// The result would exceed [`GltfReadOptions::max_vertices`].
     #[error("mesh {mesh} primitive {primitive}: more than {max} vertices in total")]
     TooManyVertices {
@@ -457,6 +469,10 @@ pub struct SoupPart {
     pub positions: Vec<DVec3>,
     /// Its triangles, indices into `positions`.
     pub triangles: Vec<[u64; 3]>,
+    /// Its texture coordinates (`TEXCOORD_0`), one per position; empty
+    /// where its primitive has none, or has them in a form other than
+    /// FLOAT VEC2 (normalised integers: read as none).
+    pub uv: Vec<DVec2>,
 }
 
 /// Every triangle primitive instance of the default scene as its own part
@@ -527,7 +543,11 @@ pub fn read_parts(bytes: &[u8], opts: &GltfReadOptions) -> Result<Vec<SoupPart>,
                     if vertices_read > opts.max_vertices {
                         return Err(GltfError::TooManyVertices { mesh: mesh_index, primitive, max: opts.max_vertices });
                     }
-                    parts.push(SoupPart { name: name.clone(), positions, triangles: Vec::new() });
+                    let uv = match prim.attributes.get(&Checked::Valid(Semantic::TexCoords(0))) {
+                        Some(acc) => read_uvs(&mut buffers, site, acc.value(), count)?,
+                        None => Vec::new(),
+                    };
+                    parts.push(SoupPart { name: name.clone(), positions, triangles: Vec::new(), uv });
                     let entry = (parts.len() - 1, 0, count);
                     shared.insert(pos_accessor, entry);
                     entry
@@ -884,6 +904,45 @@ fn append_positions(
     Ok(elems.count)
 }
 
+/// The FLOAT VEC2 texture coordinates of `accessor`, `count` of them (as
+/// many as the positions); none where the accessor holds another form
+/// (normalised integers) or another count.
+///
+/// # Errors
+/// [`GltfError`]: a dangling accessor, one out of its buffer's bounds, a
+/// non-finite coordinate.
+fn read_uvs(buffers: &mut Buffers<'_>, site: Site, accessor: usize, count: usize) -> Result<Vec<DVec2>, GltfError> {
+    let acc =
+        buffers.root.accessors.get(accessor).ok_or(GltfError::DanglingIndex { kind: "accessor", index: accessor })?;
+    let float_pairs = matches!(
+        (acc.component_type, acc.type_),
+        (Checked::Valid(GenericComponentType(ComponentType::F32)), Checked::Valid(Type::Vec2))
+    ) && !acc.normalized;
+    if !float_pairs || usize::try_from(acc.count.0).ok() != Some(count) {
+        return Ok(Vec::new());
+    }
+    let elems = accessor_elements(buffers, site, accessor, "TEXCOORD_0", "a dense FLOAT VEC2 accessor", |c, t| {
+        c == ComponentType::F32 && t == Type::Vec2
+    })?;
+    let oob = || GltfError::AccessorOutOfBounds { mesh: site.mesh, primitive: site.primitive, accessor };
+    let mut out = Vec::with_capacity(elems.count);
+    for i in 0..elems.count {
+        let e = elems.get(i).ok_or_else(oob)?;
+        let coordinate = |k: usize| le_u32(e, k * WORD).map(|w| f64::from(f32::from_le_bytes(w.to_le_bytes())));
+        let (Some(u), Some(v)) = (coordinate(0), coordinate(1)) else { return Err(oob()) };
+        if !(u.is_finite() && v.is_finite()) {
+            return Err(GltfError::NonFiniteTexCoord {
+                mesh: site.mesh,
+                primitive: site.primitive,
+                accessor,
+                vertex: i,
+            });
+        }
+        out.push(DVec2::new(u, v));
+    }
+    Ok(out)
+}
+
 /// Number of triangles `count` corners make in `mode` (at least one), or an error if they cannot.
 fn triangle_count(site: Site, mode: Mode, count: usize) -> Result<usize, GltfError> {
     let err = GltfError::IndexCount { mesh: site.mesh, primitive: site.primitive, count };
@@ -1178,6 +1237,41 @@ mod tests {
     }
 
     // ----- happy paths -----------------------------------------------------------------------
+
+    #[test]
+    fn a_parts_texture_coordinates_are_read_where_they_are_float_pairs() {
+        // BASE with a TEXCOORD_0 accessor after the triangle buffer (44 bytes)
+        let json = BASE
+            .replace(r#"{"POSITION":0}"#, r#"{"POSITION":0,"TEXCOORD_0":2}"#)
+            .replace(
+                r#"{"bufferView":1,"componentType":5123,"count":3,"type":"SCALAR"}]"#,
+                r#"{"bufferView":1,"componentType":5123,"count":3,"type":"SCALAR"},
+{"bufferView":2,"componentType":COMPONENT,"count":3,"type":"VEC2"NORMALIZED}]"#,
+            )
+            .replace(
+                r#"{"buffer":0,"byteOffset":36,"byteLength":6}]"#,
+                r#"{"buffer":0,"byteOffset":36,"byteLength":6},{"buffer":0,"byteOffset":44,"byteLength":24}]"#,
+            );
+        let with = |uv: [f32; 6], component: &str, normalized: &str| {
+            let mut bin = tri_bin(TRI, [0, 1, 2]);
+            bin.extend(uv.iter().flat_map(|c| c.to_le_bytes()));
+            read_parts(
+                &embed(&json.replace("COMPONENT", component).replace("NORMALIZED", normalized), &bin),
+                &GltfReadOptions::default(),
+            )
+        };
+        let parts = with([0.0, 0.0, 0.5, 0.0, 0.0, 0.25], "5126", "").unwrap();
+        assert_eq!(parts[0].uv, vec![DVec2::ZERO, DVec2::new(0.5, 0.0), DVec2::new(0.0, 0.25)]);
+        // normalised integers: a valid file, read without them
+        let parts = with([0.0; 6], "5123", r#","normalized":true"#).unwrap();
+        assert!(parts[0].uv.is_empty());
+        assert!(matches!(
+            with([0.0, f32::NAN, 0.0, 0.0, 0.0, 0.0], "5126", ""),
+            Err(GltfError::NonFiniteTexCoord { accessor: 2, vertex: 0, .. })
+        ));
+        // none at all
+        assert!(read_parts(&base_with("", ""), &GltfReadOptions::default()).unwrap()[0].uv.is_empty());
+    }
 
     #[test]
     fn base_triangle_reads() {

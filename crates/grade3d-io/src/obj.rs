@@ -29,7 +29,7 @@ pub enum ObjError {
         /// 1-based line.
         line: usize,
     },
-    /// A vertex index out of range.
+    /// A vertex (or texture coordinate) index out of range.
     #[error("line {line}: vertex index {index} out of range (1..={count})")]
     Index {
         /// 1-based line.
@@ -57,37 +57,51 @@ pub fn read_obj(text: &str) -> Result<(Vec<DVec3>, Vec<[u32; 3]>), ObjError> {
 /// `g`/`o` line; a name met again continues its group). Each piece has its
 /// own vertices — those its faces use, in the order they are first used —
 /// so two pieces that share a vertex of the file each get a copy (their
-/// seam is found again by welding, `template::garment_panels`).
+/// seam is found again by welding, `template::garment_panels`). A piece
+/// whose every face corner names a texture coordinate (`f v/vt …`) gets
+/// each vertex's, from its first use; the others get none.
 ///
 /// # Errors
 /// [`ObjError`].
 pub fn read_obj_panels(text: &str) -> Result<Vec<PanelMesh>, ObjError> {
     let parsed = parse(text)?;
-    let mut panels: Vec<(PanelMesh, Vec<u32>)> = Vec::new();
+    // per piece: the mesh, each file vertex's local index, whether every corner had a `vt`
+    let mut panels: Vec<(PanelMesh, Vec<u32>, bool)> = Vec::new();
     let mut slot: Vec<Option<usize>> = vec![None; parsed.groups.len()];
-    for (t, &g) in parsed.triangles.iter().zip(&parsed.group_of) {
+    for ((t, uv), &g) in parsed.triangles.iter().zip(&parsed.triangle_uvs).zip(&parsed.group_of) {
         let at = *slot[g].get_or_insert_with(|| {
-            let mesh = PanelMesh { name: parsed.groups[g].clone(), positions: Vec::new(), triangles: Vec::new() };
-            panels.push((mesh, vec![u32::MAX; parsed.positions.len()]));
+            let mesh = PanelMesh { name: parsed.groups[g].clone(), ..PanelMesh::default() };
+            panels.push((mesh, vec![u32::MAX; parsed.positions.len()], true));
             panels.len() - 1
         });
-        let (mesh, local) = &mut panels[at];
-        let corners = t.map(|v| {
-            if local[v as usize] == u32::MAX {
-                local[v as usize] = mesh.positions.len() as u32;
-                mesh.positions.push(parsed.positions[v as usize]);
+        let (mesh, local, textured) = &mut panels[at];
+        *textured &= uv.is_some();
+        let mut corners = [0; 3];
+        for (k, c) in corners.iter_mut().enumerate() {
+            let v = t[k] as usize;
+            if local[v] == u32::MAX {
+                local[v] = mesh.positions.len() as u32;
+                mesh.positions.push(parsed.positions[v]);
+                mesh.uv.push(uv.map_or(DVec2::ZERO, |w| parsed.uvs[w[k] as usize]));
             }
-            local[v as usize]
-        });
+            *c = local[v];
+        }
         mesh.triangles.push(corners);
     }
-    Ok(panels.into_iter().map(|(mesh, _)| mesh).collect())
+    Ok(panels
+        .into_iter()
+        .map(|(mesh, _, textured)| if textured { mesh } else { PanelMesh { uv: Vec::new(), ..mesh } })
+        .collect())
 }
 
 /// An OBJ text read: positions, triangles, and each triangle's group.
 struct Parsed {
     positions: Vec<DVec3>,
     triangles: Vec<[u32; 3]>,
+    /// Texture coordinates (`vt`).
+    uvs: Vec<DVec2>,
+    /// Per triangle, its corners' indices into `uvs`, where every corner has one.
+    triangle_uvs: Vec<Option<[u32; 3]>>,
     /// Per triangle, its index in `groups`.
     group_of: Vec<usize>,
     /// Group names, in the order first named (`default` first: faces before any group).
@@ -97,6 +111,8 @@ struct Parsed {
 fn parse(text: &str) -> Result<Parsed, ObjError> {
     let mut positions = Vec::new();
     let mut triangles = Vec::new();
+    let mut uvs = Vec::new();
+    let mut triangle_uvs = Vec::new();
     let mut group_of = Vec::new();
     let mut groups = vec!["default".to_string()];
     let mut group = 0;
@@ -116,6 +132,18 @@ fn parse(text: &str) -> Result<Parsed, ObjError> {
                 }
                 positions.push(DVec3::from_array(c));
             }
+            Some("vt") => {
+                let mut c = [0.0; 2];
+                for x in &mut c {
+                    let t = it.next().unwrap_or("");
+                    *x = t
+                        .parse::<f64>()
+                        .ok()
+                        .filter(|v| v.is_finite())
+                        .ok_or_else(|| ObjError::Number { line, text: t.to_string() })?;
+                }
+                uvs.push(DVec2::from_array(c));
+            }
             Some("g" | "o") => {
                 let name = it.collect::<Vec<_>>().join(" ");
                 let name = if name.is_empty() { "default".to_string() } else { name };
@@ -126,28 +154,43 @@ fn parse(text: &str) -> Result<Parsed, ObjError> {
             }
             Some("f") => {
                 let mut corners = Vec::new();
-                for t in it {
-                    let head = t.split('/').next().unwrap_or("");
-                    let index: i64 = head.parse().map_err(|_| ObjError::Number { line, text: t.to_string() })?;
-                    let count = positions.len();
+                // each corner's `vt`, while every corner so far has one
+                let mut textures: Option<Vec<u32>> = Some(Vec::new());
+                // a 1-based index, or negative from the end of the `count` read so far
+                let resolve = |t: &str, text: &str, count: usize| -> Result<u32, ObjError> {
+                    let index: i64 = t.parse().map_err(|_| ObjError::Number { line, text: text.to_string() })?;
                     let resolved = if index > 0 { index - 1 } else { count as i64 + index };
                     if resolved < 0 || resolved >= count as i64 {
                         return Err(ObjError::Index { line, index, count });
                     }
-                    corners.push(resolved as u32);
+                    Ok(resolved as u32)
+                };
+                for t in it {
+                    let mut fields = t.split('/');
+                    corners.push(resolve(fields.next().unwrap_or(""), t, positions.len())?);
+                    match fields.next().filter(|f| !f.is_empty()) {
+                        Some(vt) => {
+                            let w = resolve(vt, t, uvs.len())?;
+                            if let Some(ts) = textures.as_mut() {
+                                ts.push(w);
+                            }
+                        }
+                        None => textures = None,
+                    }
                 }
                 if corners.len() < 3 {
                     return Err(ObjError::ShortFace { line });
                 }
                 for k in 1..corners.len() - 1 {
                     triangles.push([corners[0], corners[k], corners[k + 1]]);
+                    triangle_uvs.push(textures.as_ref().map(|w| [w[0], w[k], w[k + 1]]));
                     group_of.push(group);
                 }
             }
             _ => {}
         }
     }
-    Ok(Parsed { positions, triangles, group_of, groups })
+    Ok(Parsed { positions, triangles, uvs, triangle_uvs, group_of, groups })
 }
 
 /// Writes positions, optional texture coordinates (one per vertex) and triangles.
@@ -179,17 +222,31 @@ pub fn write_obj_panels(pieces: &[PanelMesh], header: &str) -> String {
     for line in header.lines() {
         let _ = writeln!(s, "# {line}");
     }
-    let mut base = 0usize;
+    let (mut base, mut uv_base) = (0usize, 0usize);
     for p in pieces {
         let _ = writeln!(s, "g {}", p.name);
         for v in &p.positions {
             let _ = writeln!(s, "v {:.9} {:.9} {:.9}", v.x, v.y, v.z);
         }
+        let textured = !p.uv.is_empty() && p.uv.len() == p.positions.len();
+        if textured {
+            for t in &p.uv {
+                let _ = writeln!(s, "vt {:.9} {:.9}", t.x, t.y);
+            }
+        }
         for t in &p.triangles {
             let [a, b, c] = t.map(|v| v as usize + base + 1);
-            let _ = writeln!(s, "f {a} {b} {c}");
+            if textured {
+                let [ta, tb, tc] = t.map(|v| v as usize + uv_base + 1);
+                let _ = writeln!(s, "f {a}/{ta} {b}/{tb} {c}/{tc}");
+            } else {
+                let _ = writeln!(s, "f {a} {b} {c}");
+            }
         }
         base += p.positions.len();
+        if textured {
+            uv_base += p.uv.len();
+        }
     }
     s
 }
@@ -200,15 +257,37 @@ mod tests {
 
     #[test]
     fn panels_round_trip_through_their_groups() {
-        let piece = |name: &str, dx: f64| PanelMesh {
+        let piece = |name: &str, dx: f64, uv: Vec<DVec2>| PanelMesh {
             name: name.into(),
             positions: vec![DVec3::new(dx, 0.0, 0.0), DVec3::new(dx + 1.0, 0.0, 0.0), DVec3::new(dx, 0.5, 0.25)],
             triangles: vec![[0, 1, 2]],
+            uv,
         };
-        let pieces = vec![piece("front", 0.0), piece("back", 2.0)];
-        let text = write_obj_panels(&pieces, "two pieces\nin metres");
-        assert!(text.starts_with("# two pieces\n# in metres\ng front\n"), "{text}");
+        // texture coordinates (the pattern layout) where a piece has them
+        let pieces = vec![
+            piece("front", 0.0, vec![]),
+            piece("back", 2.0, vec![DVec2::ZERO, DVec2::X, DVec2::new(0.25, 0.5)]),
+            piece("sleeve", 4.0, vec![DVec2::ONE, DVec2::Y, DVec2::X]),
+        ];
+        let text = write_obj_panels(&pieces, "three pieces\nin metres");
+        assert!(text.starts_with("# three pieces\n# in metres\ng front\n"), "{text}");
+        assert!(text.contains("f 7/4 8/5 9/6"), "{text}");
         assert_eq!(read_obj_panels(&text).unwrap(), pieces);
+    }
+
+    #[test]
+    fn a_piece_with_a_face_without_texture_coordinates_has_none() {
+        let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n\
+                    g a\nf 1/1 2/2 3/3\nf 2 4 3\ng b\nf 1/1 2/2 3/3\n";
+        let panels = read_obj_panels(text).unwrap();
+        assert_eq!((panels[0].uv.len(), panels[1].uv.len()), (0, 3));
+        assert_eq!(panels[1].uv, vec![DVec2::ZERO, DVec2::X, DVec2::Y]);
+        // a texture index beyond those read is named
+        assert_eq!(
+            read_obj_panels("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/2 3/3\n").unwrap_err(),
+            ObjError::Index { line: 5, index: 2, count: 1 }
+        );
+        assert!(read_obj_panels("vt 0 x\n").is_err());
     }
 
     #[test]

@@ -33,7 +33,7 @@ use crate::store::StoredScan;
 use crate::template::format::Template;
 use crate::template::from_curves::{panels_from_curves, CurvePanel, CurvesOptions, FromCurvesError};
 use crate::template::from_garment::{
-    author_from_garment, detect_units, DesignBody, FromGarmentError, GarmentOptions, Unmapped,
+    author_from_garment, detect_units, DesignBody, FromGarmentError, GarmentOptions, GrainFound, Unmapped,
 };
 use crate::template::garment_panels::PanelMesh;
 use crate::AppState;
@@ -71,7 +71,9 @@ pub struct GarmentUpload {
     /// avatar's and the garment's.
     pub units: Option<Units>,
     /// Authoring options (JSON): `max_edge_mm` (90), `cut` (`none`, `sides`, `sides_and_centre`),
-    /// `profile_points` (7), `nodes` (extra node positions, m), `defaults` (grading defaults), …
+    /// `profile_points` (7), `nodes` (extra node positions, m), `defaults` (grading defaults),
+    /// `grain_from_uv` (true: a piece's grain along its texture coordinates' `v`, the pattern layout
+    /// CLO3D, Browzwear and Marvelous Designer export; false for a texture atlas), …
     pub options: Option<String>,
 }
 
@@ -118,6 +120,9 @@ pub struct Authored {
     pub design_body: DesignBody,
     /// The pieces after cutting (a tube is cut into front and back).
     pub pieces: Vec<String>,
+    /// Each piece's grain: from its texture coordinates (the pattern layout, the grain along `v`) or the
+    /// body's vertical, and how far the template's grain line (a pair of nodes) runs from it.
+    pub grains: BTreeMap<String, GrainFound>,
     /// The girths the garment goes around and its ease there, mm (the template's `ease_mm`).
     pub ease_mm: BTreeMap<String, f64>,
     /// What could not be mapped (a piece far from every feature point, a girth line a seam crosses
@@ -365,6 +370,7 @@ fn stored(a: crate::template::from_garment::Authored, body: DesignBody, units: U
         template: super::store::Entry { name: a.template.name.clone(), version: a.template.version },
         design_body: body.clone(),
         pieces: a.pieces,
+        grains: a.grains,
         ease_mm: a.girths,
         unmapped: a.unmapped,
         nodes: a.template.nodes.len(),

@@ -230,6 +230,7 @@ fn gltf_problem(e: &GltfError, field: &str, detail: String) -> Problem {
         | GltfError::IndexCount { .. }
         | GltfError::IndexOutOfRange { .. }
         | GltfError::NonFinitePosition { .. }
+        | GltfError::NonFiniteTexCoord { .. }
         | GltfError::NoTriangles
         | GltfError::Mesh { .. }
         | GltfError::BadNormal { .. } => StatusCode::BAD_REQUEST,

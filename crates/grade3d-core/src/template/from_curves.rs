@@ -151,7 +151,7 @@ pub fn panels_from_curves(panels: &[CurvePanel], opts: &CurvesOptions) -> Result
             CoonsPatch::new(&points(&p.bottom), &points(&p.top), &points(&p.left), &points(&p.right), &opts.coons)
                 .map_err(patch)?;
         let (positions, triangles) = coons.sample(opts.samples, opts.samples).map_err(patch)?;
-        patches.push(PanelMesh { name: p.name.clone(), positions, triangles });
+        patches.push(PanelMesh { name: p.name.clone(), positions, triangles, uv: Vec::new() });
     }
     // every patch faces away from the centroid of all their points
     let all: Vec<DVec3> = patches.iter().flat_map(|p| p.positions.iter().copied()).collect();
@@ -195,7 +195,7 @@ pub fn panels_from_curves(panels: &[CurvePanel], opts: &CurvesOptions) -> Result
         }
         let joined =
             weld_panels(&parts, &weld).map_err(|source| FromCurvesError::Join { piece: name.clone(), source })?;
-        pieces.push(PanelMesh { name, positions: joined.positions, triangles: joined.triangles });
+        pieces.push(PanelMesh { name, positions: joined.positions, triangles: joined.triangles, uv: Vec::new() });
     }
     Ok(pieces.into_iter().map(by_first_use).collect())
 }
@@ -220,7 +220,7 @@ fn by_first_use(piece: PanelMesh) -> PanelMesh {
             })
         })
         .collect();
-    PanelMesh { name: piece.name, positions, triangles }
+    PanelMesh { name: piece.name, positions, triangles, uv: Vec::new() }
 }
 
 #[cfg(test)]

@@ -54,8 +54,12 @@
 //!    chord's points projected onto the garment; each resampled by arc
 //!    length to [`GarmentOptions::profile_points`].
 //! 7. **Panels, seams, notches, mirror pairs**: the pieces' faces; their
-//!    grain from the pair of nodes that runs most nearly along the body's
-//!    vertical (no UVs are read yet); seams as the template edges two pieces
+//!    grain from the pair of nodes that runs most nearly along the piece's
+//!    grain in the file — the direction its texture coordinates' `v` grows
+//!    on the surface ([`uv_grain`]; a piece cut from it has its grain) —,
+//!    else along the body's vertical ([`GarmentOptions::grain_from_uv`];
+//!    [`Authored::grains`] says which, and how far the pair runs from it);
+//!    seams as the template edges two pieces
 //!    share ([`super::garment_panels::weld_panels`] on the coarse pieces);
 //!    a notch where a girth line crosses a seam; a pair of pieces whose
 //!    nodes mirror each other across the body's sagittal plane within
@@ -183,6 +187,12 @@ pub struct GarmentOptions {
     /// Edge flips of the contracted mesh within each band (method, step 5).
     /// Default [`FlipOptions::default`].
     pub flips: FlipOptions,
+    /// Take each piece's grain from its texture coordinates where it has
+    /// them ([`PanelMesh::uv`]: the pattern layout CLO3D, Browzwear and
+    /// Marvelous Designer export, the grain along `v`; method, step 7);
+    /// false: the body's vertical, as for a piece without them (a texture
+    /// atlas is not a pattern layout). Default true.
+    pub grain_from_uv: bool,
 }
 
 impl Default for GarmentOptions {
@@ -204,6 +214,7 @@ impl Default for GarmentOptions {
             defaults: GradingDefaults { guided_darts: true, ..GradingDefaults::default() },
             symmetric_nodes_mm: 0.0,
             flips: FlipOptions::default(),
+            grain_from_uv: true,
         }
     }
 }
@@ -282,6 +293,34 @@ pub enum Unmapped {
         /// Distance, mm.
         distance_mm: f64,
     },
+    /// A piece whose texture coordinates give no direction (every
+    /// triangle degenerate in them): its grain is the body's vertical.
+    FlatUv {
+        /// The piece, as the file names it.
+        piece: String,
+    },
+}
+
+/// Where a piece's grain line came from, and how near its template edge
+/// (a pair of nodes) runs to it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+pub struct GrainFound {
+    /// `uv`: the piece's texture coordinates (the pattern's `v`);
+    /// `vertical`: the body's vertical.
+    pub source: GrainSource,
+    /// The angle between the template's grain (from one node to another)
+    /// and that direction on the design body, degrees.
+    pub deviation_deg: f64,
+}
+
+/// See [`GrainFound::source`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum GrainSource {
+    /// From the texture coordinates.
+    Uv,
+    /// The body's vertical.
+    Vertical,
 }
 
 /// What [`author_from_garment`] made.
@@ -298,6 +337,8 @@ pub struct Authored {
     pub girths: BTreeMap<String, f64>,
     /// Pieces after cutting.
     pub pieces: Vec<String>,
+    /// Each piece's grain (after cutting), by name.
+    pub grains: BTreeMap<String, GrainFound>,
 }
 
 /// The body a garment was designed on: one of ours, a size of a chart, or
@@ -606,6 +647,17 @@ pub fn author_from_garment(
 ) -> Result<Authored, FromGarmentError> {
     check(opts)?;
     let ax = axes(body)?;
+    let mut unmapped = Vec::new();
+    // the grain of each piece as the file gives it (its texture coordinates), by name
+    let mut uv_grains: BTreeMap<&str, DVec3> = BTreeMap::new();
+    for p in pieces.iter().filter(|p| opts.grain_from_uv && !p.uv.is_empty()) {
+        match uv_grain(p) {
+            Some(g) => {
+                uv_grains.insert(&p.name, if g.dot(ax.up) < 0.0 { -g } else { g });
+            }
+            None => unmapped.push(Unmapped::FlatUv { piece: p.name.clone() }),
+        }
+    }
     let welded = weld_panels(pieces, &opts.weld)?;
     let mut soup = Soup {
         positions: welded.positions.clone(),
@@ -619,7 +671,6 @@ pub fn author_from_garment(
     // girth lines
     let mut rings: Vec<RingLine> = Vec::new();
     let mut girths: BTreeMap<String, f64> = BTreeMap::new();
-    let mut unmapped = Vec::new();
     for gname in ["neck_base", "chest", "bust", "underbust", "waist", "hip", "thigh", "knee"] {
         let mut found = Vec::new();
         for &curve in ring_curves(gname) {
@@ -790,6 +841,7 @@ pub fn author_from_garment(
             name: pname.clone(),
             positions: positions.clone(),
             triangles: tris.iter().map(|&f| triangles[f]).collect(),
+            uv: Vec::new(),
         });
         piece_triangles.push(tris);
         kept_names.push(pname.clone());
@@ -821,14 +873,26 @@ pub fn author_from_garment(
         .filter(|(_, i)| seam_nodes.contains(i))
         .collect();
 
+    // a piece cut from a file's piece (`{name}-…`) has its grain
+    let asked = |piece: &str| -> (GrainSource, DVec3) {
+        uv_grains
+            .iter()
+            .filter(|(n, _)| piece == **n || piece.strip_prefix(**n).is_some_and(|rest| rest.starts_with('-')))
+            .max_by_key(|(n, _)| n.len())
+            .map_or((GrainSource::Vertical, ax.up), |(_, &g)| (GrainSource::Uv, g))
+    };
+    let mut grains = BTreeMap::new();
     let panels: Vec<DraftPanel> = kept_names
         .iter()
         .zip(&piece_triangles)
-        .map(|(n, tris)| DraftPanel {
-            name: n.clone(),
-            triangles: tris.clone(),
-            grain: grain(tris, &triangles, &positions, &ax),
-            quantity: 1,
+        .map(|(n, tris)| {
+            let (source, direction) = asked(n);
+            let pair = grain(tris, &triangles, &positions, direction);
+            let along = (positions[pair.1 as usize] - positions[pair.0 as usize]).normalize_or_zero();
+            // a grain line has no sense
+            let deviation_deg = along.dot(direction).abs().min(1.0).acos().to_degrees();
+            grains.insert(n.clone(), GrainFound { source, deviation_deg });
+            DraftPanel { name: n.clone(), triangles: tris.clone(), grain: pair, quantity: 1 }
         })
         .collect();
     let mirror_pairs = mirror_pairs(&soup, &kept_names, &ax, opts.mirror_tolerance_mm * 1e-3);
@@ -901,7 +965,7 @@ pub fn author_from_garment(
         draft.positions[v as usize] = placed.positions[v as usize];
     }
     let template = encode(&draft, body)?;
-    Ok(Authored { template, surface, unmapped, girths, pieces: kept_names })
+    Ok(Authored { template, surface, unmapped, girths, pieces: kept_names, grains })
 }
 
 fn check(opts: &GarmentOptions) -> Result<(), FromGarmentError> {
@@ -1615,9 +1679,37 @@ fn resample(points: &[DVec3], n: usize) -> Vec<DVec3> {
         .collect()
 }
 
-/// The grain: the pair of a piece's nodes running most nearly along the
-/// body's vertical, long and near its middle.
-fn grain(tris: &[usize], triangles: &[[u32; 3]], positions: &[DVec3], ax: &Axes) -> (u32, u32) {
+/// A piece's grain from its texture coordinates (method, step 7): the
+/// direction in which the pattern's `v` grows, `∂x/∂v`, averaged over its
+/// triangles weighted by area — per triangle, with `E = [x₁ − x₀, x₂ − x₀]`
+/// and `D = [t₁ − t₀, t₂ − t₀]`, the second column of the Jacobian
+/// `J = E D⁻¹` of the layout's map onto the surface. `None` where every
+/// triangle is degenerate in its coordinates (or the piece has none).
+pub fn uv_grain(piece: &PanelMesh) -> Option<DVec3> {
+    if piece.uv.len() != piece.positions.len() {
+        return None;
+    }
+    let mut sum = DVec3::ZERO;
+    for t in &piece.triangles {
+        let [a, b, c] = t.map(|v| v as usize);
+        let (e1, e2) = (piece.positions[b] - piece.positions[a], piece.positions[c] - piece.positions[a]);
+        let (d1, d2) = (piece.uv[b] - piece.uv[a], piece.uv[c] - piece.uv[a]);
+        let det = d1.perp_dot(d2);
+        let area = 0.5 * e1.cross(e2).length();
+        if det.abs() <= f64::EPSILON * d1.length_squared().max(d2.length_squared()) || area == 0.0 {
+            continue;
+        }
+        // second column of E D⁻¹, D⁻¹ = [[d2.y, −d2.x], [−d1.y, d1.x]] / det
+        let dv = (e2 * d1.x - e1 * d2.x) / det;
+        sum += dv.normalize_or_zero() * area;
+    }
+    sum.try_normalize()
+}
+
+/// The grain: the pair of a piece's nodes running most nearly along
+/// `direction` (unit: the body's vertical, or the file's grain), long and
+/// near the piece's middle.
+fn grain(tris: &[usize], triangles: &[[u32; 3]], positions: &[DVec3], direction: DVec3) -> (u32, u32) {
     let nodes: BTreeSet<u32> = tris.iter().flat_map(|&f| triangles[f]).collect();
     let nodes: Vec<u32> = nodes.into_iter().collect();
     let centre = nodes.iter().map(|&v| positions[v as usize]).sum::<DVec3>() / nodes.len().max(1) as f64;
@@ -1625,13 +1717,13 @@ fn grain(tris: &[usize], triangles: &[[u32; 3]], positions: &[DVec3], ax: &Axes)
     for &a in &nodes {
         for &b in &nodes {
             let d = positions[a as usize] - positions[b as usize];
-            let rise = d.dot(ax.up);
+            let rise = d.dot(direction);
             if rise <= 0.0 {
                 continue;
             }
-            let lateral = (d - ax.up * rise).length();
+            let lateral = (d - direction * rise).length();
             let mid = (positions[a as usize] + positions[b as usize]) * 0.5 - centre;
-            let off = (mid - ax.up * mid.dot(ax.up)).length();
+            let off = (mid - direction * mid.dot(direction)).length();
             let score = rise - 4.0 * lateral - off;
             if score > best.0 {
                 best = (score, (a, b));
@@ -1989,6 +2081,7 @@ fn hanging(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::DVec2;
 
     #[test]
     fn disc_counts() {
@@ -2012,12 +2105,45 @@ mod tests {
     }
 
     #[test]
+    fn the_grain_of_a_layout_is_found_exactly_on_a_plane_and_a_degenerate_one_is_none() {
+        // a plane in 3D, tilted; its layout is its own coordinates turned by 30°: the grain (+v) is
+        // the plane's axis turned back
+        let (e1, e2) = (DVec3::new(1.0, 0.0, 0.2).normalize(), DVec3::new(0.0, 1.0, 0.3).normalize());
+        let e2 = (e2 - e1 * e1.dot(e2)).normalize();
+        let (c, s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
+        let (mut positions, mut uv, mut triangles) = (Vec::new(), Vec::new(), Vec::new());
+        for j in 0..4 {
+            for i in 0..4 {
+                let (x, y) = (0.1 * i as f64, 0.1 * j as f64 + 0.01 * (i * i) as f64);
+                positions.push(e1 * x + e2 * y);
+                uv.push(DVec2::new(c * x - s * y, s * x + c * y) * 7.0);
+            }
+        }
+        for j in 0..3 {
+            for i in 0..3 {
+                let v = j * 4 + i;
+                triangles.push([v, v + 1, v + 5]);
+                triangles.push([v, v + 5, v + 4]);
+            }
+        }
+        let piece = PanelMesh { name: "p".into(), positions, triangles, uv };
+        let g = uv_grain(&piece).unwrap();
+        // ∂x/∂v for x = R⁻¹ t / 7: the layout's v axis turned back by −30°
+        let want = (e1 * s + e2 * c).normalize();
+        assert!(g.distance(want) < 1e-12, "{g} vs {want}");
+        let flat = PanelMesh { uv: vec![DVec2::ONE; piece.positions.len()], ..piece.clone() };
+        assert_eq!(uv_grain(&flat), None);
+        assert_eq!(uv_grain(&PanelMesh { uv: Vec::new(), ..piece }), None);
+    }
+
+    #[test]
     fn units_by_the_garments_size() {
         use crate::body::frame::Units;
         let piece = |s: f64| PanelMesh {
             name: "p".into(),
             positions: vec![DVec3::ZERO, DVec3::new(0.5, 0.0, 0.0) * s, DVec3::new(0.0, 0.9, 0.0) * s],
             triangles: vec![[0, 1, 2]],
+            uv: Vec::new(),
         };
         assert_eq!(detect_units(&[piece(1.0)]), Some(Units::Metres));
         assert_eq!(detect_units(&[piece(100.0)]), Some(Units::Centimetres));

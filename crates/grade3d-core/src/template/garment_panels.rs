@@ -30,11 +30,11 @@
 
 use std::collections::BTreeMap;
 
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
 /// One pattern piece as exported: its name and its own mesh.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct PanelMesh {
     /// The piece's name (the OBJ group, the glTF mesh).
     pub name: String,
@@ -42,6 +42,10 @@ pub struct PanelMesh {
     pub positions: Vec<DVec3>,
     /// Its triangles (indices into `positions`).
     pub triangles: Vec<[u32; 3]>,
+    /// Its texture coordinates, one per vertex, or none: the 2D pattern
+    /// layout CLO3D, Browzwear and Marvelous Designer export as UVs, the
+    /// grain along `v` (`template::from_garment` reads it).
+    pub uv: Vec<DVec2>,
 }
 
 /// Knobs of [`weld_panels`].
@@ -304,7 +308,7 @@ mod tests {
     /// The flattening tests' grid (`ny` rows × `nx` columns over `(s, t) ∈ [0, 1]²`) as a piece.
     fn grid(name: &str, nx: usize, ny: usize, f: impl Fn(f64, f64) -> DVec3) -> PanelMesh {
         let (positions, triangles) = crate::pattern::flatten::shapes::grid(ny, nx, f);
-        PanelMesh { name: name.into(), positions, triangles }
+        PanelMesh { name: name.into(), positions, triangles, uv: Vec::new() }
     }
 
     #[test]
@@ -365,8 +369,8 @@ mod tests {
             let a = std::f64::consts::TAU * k as f64 / n as f64;
             DVec3::new(r * a.cos(), r * a.sin(), 0.0)
         };
-        let mut sleeve = PanelMesh { name: "sleeve".into(), positions: Vec::new(), triangles: Vec::new() };
-        let mut body = PanelMesh { name: "body".into(), positions: Vec::new(), triangles: Vec::new() };
+        let mut sleeve = PanelMesh { name: "sleeve".into(), ..PanelMesh::default() };
+        let mut body = PanelMesh { name: "body".into(), ..PanelMesh::default() };
         for k in 0..n {
             sleeve.positions.push(ring(0.05, k));
             sleeve.positions.push(ring(0.05, k) + DVec3::Z * 0.3);
@@ -420,6 +424,7 @@ mod tests {
             name: name.into(),
             positions: vec![DVec3::ZERO, DVec3::Y, d],
             triangles: vec![[0, 1, 2]],
+            uv: Vec::new(),
         };
         assert!(matches!(
             weld_panels(&[fin("a", DVec3::X), fin("b", DVec3::NEG_X), fin("c", DVec3::Z)], &WeldOptions::default()),
