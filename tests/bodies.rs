@@ -29,7 +29,9 @@ fn every_fixture_point_has_a_sound_frame() {
     let mut worst = (f64::INFINITY, String::new());
     for (name, mesh, lm) in fixture_bodies() {
         let body = derive(mesh, &lm);
-        assert_eq!(body.points.len(), PointId::ALL.len(), "{name}");
+        // the fixtures' landmark files are of vocabulary version 2: every point but the arms'
+        let required = PointId::ALL.iter().filter(|p| !grade3d::body::vocab::optional_point(**p)).count();
+        assert_eq!(body.points.len(), required, "{name}");
         for (id, p) in &body.points {
             let t = p.frame.triple().abs();
             assert!(t >= 0.1, "{name}: frame at {id} has triple product {t}");
@@ -39,6 +41,89 @@ fn every_fixture_point_has_a_sound_frame() {
         }
     }
     eprintln!("smallest |t1·(t2×n)| over all fixtures: {:.3} at {}", worst.0, worst.1);
+}
+
+/// Issue #18 item 5 (vocabulary version 3): the arm curves a sleeve needs,
+/// on hm08 bodies across issue #7's population. Planted answers from
+/// MakeHuman's own measures, drawn on the hm08 topology: the derived
+/// upper-arm and wrist girths (sections across the arm through the outer
+/// points) are within 8 % of MakeHuman's `upperarm-circ` and `wrist-circ`
+/// rings; the arm line, over the top of the arm, is at least the straight
+/// shoulder–elbow–wrist distance and at most 25 % more (a tape from the
+/// acromion runs over the deltoid: 524 mm over a 457 mm chord on the
+/// reference body); the two arms of the symmetric reference body agree to
+/// 1 mm.
+#[test]
+fn the_arm_curves_follow_makehumans_arm_measures() {
+    use grade3d::body::measure::girth_of;
+    let model = BodyModel::embedded().unwrap();
+    let rings = &model.data().rings;
+    let ring_length = |mesh: &TriMesh, name: &str, mirrored: bool| {
+        let pts: Vec<DVec3> = rings[name]
+            .iter()
+            .map(|&v| {
+                let v = grade3d::geom::mesh::VertexId(u32::from(v));
+                mesh.position(if mirrored { model.mirror(v) } else { v })
+            })
+            .collect();
+        // a closed ring, whether or not its list repeats its first vertex
+        let mut pts: Vec<DVec3> = pts;
+        if pts.len() > 1 && pts.first() == pts.last() {
+            pts.pop();
+        }
+        Polyline::new(pts, true).length()
+    };
+    let mut bodies: Vec<(String, TriMesh)> = vec![("reference".into(), {
+        let mut p = MannequinParams::default();
+        p.macros.gender = 0.0;
+        model.build(&p).unwrap()
+    })];
+    for p in grade3d::mannequin::population::sample_population(40, 13).into_iter().step_by(5) {
+        bodies.push((p.name.clone(), model.build(&p.params).unwrap()));
+    }
+    for (name, mesh) in bodies {
+        let lm = hm08_landmarks(model, &mesh, &Default::default()).unwrap();
+        let body = derive(mesh.clone(), &lm);
+        let g = |c: CurveId| girth_of(&body.curves[&c].polyline, body.curves[&c].plane.as_ref());
+        for (side, mirrored, [upper, wrist, line], [s, e, w]) in [
+            (
+                "left",
+                false,
+                [CurveId::UpperArmLeft, CurveId::WristLeft, CurveId::ArmLineLeft],
+                [PointId::ShoulderLeft, PointId::ElbowLeft, PointId::WristLeft],
+            ),
+            (
+                "right",
+                true,
+                [CurveId::UpperArmRight, CurveId::WristRight, CurveId::ArmLineRight],
+                [PointId::ShoulderRight, PointId::ElbowRight, PointId::WristRight],
+            ),
+        ] {
+            // MakeHuman's rings list the left arm's vertices (+X); the right is their mirror
+            let (mu, mw) = (ring_length(&mesh, "upperarm-circ", mirrored), ring_length(&mesh, "wrist-circ", mirrored));
+            let (gu, gw) = (g(upper), g(wrist));
+            let p = |id: PointId| body.points[&id].position;
+            let chord = p(s).distance(p(e)) + p(e).distance(p(w));
+            let arm = body.curves[&line].polyline.length();
+            eprintln!(
+                "{name} {side}: upper arm {:.0}/{:.0} mm, wrist {:.0}/{:.0} mm, arm line {:.0} mm over {:.0}",
+                gu * 1e3,
+                mu * 1e3,
+                gw * 1e3,
+                mw * 1e3,
+                arm * 1e3,
+                chord * 1e3
+            );
+            assert!((gu / mu - 1.0).abs() < 0.08, "{name} {side}: upper arm {gu} vs MakeHuman's {mu}");
+            assert!((gw / mw - 1.0).abs() < 0.08, "{name} {side}: wrist {gw} vs MakeHuman's {mw}");
+            assert!(arm >= chord * 0.999 && arm <= 1.25 * chord, "{name} {side}: arm line {arm} over {chord}");
+        }
+        if name == "reference" {
+            for (l, r) in [(CurveId::UpperArmLeft, CurveId::UpperArmRight), (CurveId::ElbowLeft, CurveId::ElbowRight)] {
+                assert!((g(l) - g(r)).abs() < 1e-3, "{l} {} vs {r} {}", g(l), g(r));
+            }
+        }
+    }
 }
 
 /// The embedded hm08 model built with `macros` (no modifiers) and its

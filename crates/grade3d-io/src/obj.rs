@@ -108,6 +108,20 @@ struct Parsed {
     groups: Vec<String>,
 }
 
+/// The next `N` fields of a line as finite numbers.
+fn numbers<'a, const N: usize>(fields: &mut impl Iterator<Item = &'a str>, line: usize) -> Result<[f64; N], ObjError> {
+    let mut c = [0.0; N];
+    for x in &mut c {
+        let t = fields.next().unwrap_or("");
+        *x = t
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| ObjError::Number { line, text: t.to_string() })?;
+    }
+    Ok(c)
+}
+
 fn parse(text: &str) -> Result<Parsed, ObjError> {
     let mut positions = Vec::new();
     let mut triangles = Vec::new();
@@ -120,30 +134,8 @@ fn parse(text: &str) -> Result<Parsed, ObjError> {
         let line = i + 1;
         let mut it = raw.split_whitespace();
         match it.next() {
-            Some("v") => {
-                let mut c = [0.0; 3];
-                for x in &mut c {
-                    let t = it.next().unwrap_or("");
-                    *x = t
-                        .parse::<f64>()
-                        .ok()
-                        .filter(|v| v.is_finite())
-                        .ok_or_else(|| ObjError::Number { line, text: t.to_string() })?;
-                }
-                positions.push(DVec3::from_array(c));
-            }
-            Some("vt") => {
-                let mut c = [0.0; 2];
-                for x in &mut c {
-                    let t = it.next().unwrap_or("");
-                    *x = t
-                        .parse::<f64>()
-                        .ok()
-                        .filter(|v| v.is_finite())
-                        .ok_or_else(|| ObjError::Number { line, text: t.to_string() })?;
-                }
-                uvs.push(DVec2::from_array(c));
-            }
+            Some("v") => positions.push(DVec3::from_array(numbers(&mut it, line)?)),
+            Some("vt") => uvs.push(DVec2::from_array(numbers(&mut it, line)?)),
             Some("g" | "o") => {
                 let name = it.collect::<Vec<_>>().join(" ");
                 let name = if name.is_empty() { "default".to_string() } else { name };

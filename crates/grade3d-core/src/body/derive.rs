@@ -378,13 +378,20 @@ pub fn derive_features(
             max_m: opts.max_stature_m,
         });
     }
-    // landmarks needed: those of the curves not given explicitly
+    // landmarks needed: those of the curves not given explicitly; an optional curve (an arm) is
+    // derived only where all its landmarks are given
+    let rule_landmarks = |c: &vocab::CurveDef| match c.rule {
+        CurveRule::Section { landmarks, .. } | CurveRule::Path { landmarks, .. } => landmarks,
+    };
+    let wanted = |c: &&vocab::CurveDef| {
+        landmarks.curves.contains_key(&c.id)
+            || !vocab::optional_curve(c.id)
+            || rule_landmarks(c).iter().all(|p| landmarks.points.contains_key(p))
+    };
     let mut missing: Vec<PointId> = vocab::CURVES
         .iter()
-        .filter(|c| !landmarks.curves.contains_key(&c.id))
-        .flat_map(|c| match c.rule {
-            CurveRule::Section { landmarks, .. } | CurveRule::Path { landmarks, .. } => landmarks.iter().copied(),
-        })
+        .filter(|c| !landmarks.curves.contains_key(&c.id) && !vocab::optional_curve(c.id))
+        .flat_map(|c| rule_landmarks(c).iter().copied())
         .filter(|p| !landmarks.points.contains_key(p))
         .collect();
     missing.sort();
@@ -428,7 +435,8 @@ pub fn derive_features(
 
     // the curves are independent sections and paths: derived side by side on rayon's pool
     // (issue #15), the first failure in vocabulary order reported, as one after another would
-    let derived: Vec<Result<FeatureCurve, FeatureError>> = vocab::CURVES
+    let defs: Vec<&vocab::CurveDef> = vocab::CURVES.iter().filter(wanted).collect();
+    let derived: Vec<Result<FeatureCurve, FeatureError>> = defs
         .par_iter()
         .map(|def| match landmarks.curves.get(&def.id) {
             Some(given) => given_curve(def.id, given),
@@ -436,7 +444,7 @@ pub fn derive_features(
         })
         .collect();
     let mut curves = BTreeMap::new();
-    for (def, curve) in vocab::CURVES.iter().zip(derived) {
+    for (def, curve) in defs.iter().zip(derived) {
         curves.insert(def.id, curve?);
     }
     check_limb_sides(&curves, &snapped, opts)?;
@@ -445,8 +453,9 @@ pub fn derive_features(
     let mut points = BTreeMap::new();
     let h = opts.tangent_window_mm / MM_PER_M;
     for def in vocab::POINTS {
-        let c1 = &curves[&def.f1].polyline;
-        let c2 = &curves[&def.f2].polyline;
+        // a point on an optional curve the body lacks (its arms, without their landmarks)
+        let (Some(c1), Some(c2)) = (curves.get(&def.f1), curves.get(&def.f2)) else { continue };
+        let (c1, c2) = (&c1.polyline, &c2.polyline);
         let near = match def.pick {
             Pick::Landmark => snapped.get(&def.id).copied().unwrap_or_else(|| 0.5 * (c1.centroid() + c2.centroid())),
             Pick::Toward(dir) => c1.centroid() + DVec3::from_array(dir) * FAR_M,
@@ -581,12 +590,13 @@ fn check_midline(
 
 /// Landmarks that lie below others (up is +Y), with the rule: `(lower,
 /// upper, why)`. Each pair given is checked.
-const BELOW: [(PointId, PointId, &str); 16] = {
+const BELOW: [(PointId, PointId, &str); 22] = {
     use PointId as P;
     const LEG: &str = "ankle, knee and thigh girths lie in that order up the leg";
     const THIGH: &str =
         "a thigh girth is measured below the crotch (ISO 8559-1 5.3.20); above it, it runs round both legs";
     const TORSO: &str = "crotch, hip, waist, bust, underarm and shoulder lie in that order up the body";
+    const ARM: &str = "in the reference (A-) pose, wrist, elbow, upper arm and shoulder lie in that order up the arm";
     [
         (P::AnkleLeft, P::KneeLeft, LEG),
         (P::AnkleRight, P::KneeRight, LEG),
@@ -604,6 +614,12 @@ const BELOW: [(PointId, PointId, &str); 16] = {
         (P::BustRight, P::UnderarmRight, TORSO),
         (P::UnderarmLeft, P::ShoulderLeft, TORSO),
         (P::UnderarmRight, P::ShoulderRight, TORSO),
+        (P::WristLeft, P::ElbowLeft, ARM),
+        (P::WristRight, P::ElbowRight, ARM),
+        (P::ElbowLeft, P::UpperArmLeft, ARM),
+        (P::ElbowRight, P::UpperArmRight, ARM),
+        (P::UpperArmLeft, P::ShoulderLeft, ARM),
+        (P::UpperArmRight, P::ShoulderRight, ARM),
     ]
 };
 
@@ -823,6 +839,14 @@ fn section_plane(
             let t = deg.to_radians();
             let n = DVec3::new(t.cos(), 0.0, -t.sin());
             Plane { normal: n, offset: n.dot(c) }
+        }
+        PlaneRule::Across => {
+            let (a, from, to) = match pts {
+                [a, f, t, ..] => (*a, *f, *t),
+                _ => return Err(FeatureError::NoSection { curve, reason: "(rule needs three landmarks)".into() }),
+            };
+            Plane::from_point_normal(a, to - from)
+                .ok_or_else(|| FeatureError::NoSection { curve, reason: "(the limb's axis has no length)".into() })?
         }
         PlaneRule::LegSagittal => {
             // landmarks: thigh side point, ankle side point, crotch (the midline)

@@ -29,8 +29,11 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 /// meaning; templates and landmark files record the version they use.
 /// Version 2 added the inner (medial) thigh, knee and ankle points, the
 /// oblique torso points, the leg front/back points, and the lines that
-/// define them.
-pub const VOCABULARY_VERSION: u32 = 2;
+/// define them. Version 3 added the arms (issue #18 item 5: what a sleeve
+/// needs): the upper-arm, elbow and wrist girths, the shoulder-to-wrist
+/// line and their points — [`ARM_CURVES`], derived where their landmarks
+/// are given ([`optional_curve`]).
+pub const VOCABULARY_VERSION: u32 = 3;
 
 macro_rules! id_enum {
     ($(#[$doc:meta])* $name:ident { $($(#[$vdoc:meta])* $var:ident = $s:literal),+ $(,)? }) => {
@@ -146,6 +149,28 @@ id_enum! {
         LegSagittalLeft = "leg_sagittal_left",
         /// Right leg sagittal line.
         LegSagittalRight = "leg_sagittal_right",
+        /// Left upper-arm girth (ISO 8559-1 5.3.16): the arm's section perpendicular to the upper arm (shoulder
+        /// point to elbow) through the upper-arm point, at the level of the armpit.
+        UpperArmLeft = "upper_arm_left",
+        /// Right upper-arm girth.
+        UpperArmRight = "upper_arm_right",
+        /// Left elbow girth (ISO 8559-1 5.3.17): the section through the elbow point perpendicular to the arm
+        /// (shoulder point to wrist).
+        ElbowLeft = "elbow_left",
+        /// Right elbow girth.
+        ElbowRight = "elbow_right",
+        /// Left wrist girth (ISO 8559-1 5.3.19): the section through the wrist point perpendicular to the
+        /// forearm (elbow to wrist).
+        WristLeft = "wrist_left",
+        /// Right wrist girth.
+        WristRight = "wrist_right",
+        /// Left arm line: shoulder point over the upper-arm point and the elbow to the wrist, down the outside
+        /// of the arm (ISO 8559-1 5.4.14's arm length is its length); each piece in the plane of its chord and
+        /// the vertical, which cuts the arm across its top (a plane of the chord and the depth axis would
+        /// graze it along the top).
+        ArmLineLeft = "arm_line_left",
+        /// Right arm line.
+        ArmLineRight = "arm_line_right",
     }
 }
 
@@ -302,6 +327,18 @@ id_enum! {
         AnkleRightFront = "ankle_right_front",
         /// Right ankle girth at the back of the leg.
         AnkleRightBack = "ankle_right_back",
+        /// Left upper-arm point: the upper-arm girth on the outside of the arm.
+        UpperArmLeft = "upper_arm_left",
+        /// Right upper-arm point.
+        UpperArmRight = "upper_arm_right",
+        /// Left elbow point (olecranon, ISO 8559-1 3.1.13), on the outside of the bent arm.
+        ElbowLeft = "elbow_left",
+        /// Right elbow point.
+        ElbowRight = "elbow_right",
+        /// Left wrist point (ulnar styloid, ISO 8559-1 3.1.14).
+        WristLeft = "wrist_left",
+        /// Right wrist point.
+        WristRight = "wrist_right",
     }
 }
 
@@ -351,6 +388,9 @@ pub enum PlaneRule {
     /// positive towards the body's left) from the sagittal plane: normal
     /// `(cos θ, 0, −sin θ)`.
     VerticalAtAngle(f64),
+    /// Through the first landmark, normal to the line from the second to
+    /// the third (a limb's girth, across its axis).
+    Across,
     /// Through the middle of a leg, containing Z: landmarks are the thigh
     /// and ankle side points and the crotch; the plane passes 55 % of the
     /// way from the crotch to the thigh side point and through the middle
@@ -660,7 +700,99 @@ pub const CURVES: &[CurveDef] = &[
             Axis::NegX,
         ),
     },
+    CurveDef {
+        id: CurveId::UpperArmLeft,
+        name: "left upper-arm girth",
+        rule: section(
+            &[P::UpperArmLeft, P::ShoulderLeft, P::ElbowLeft],
+            PlaneRule::Across,
+            LoopChoice::Nearest,
+            Axis::X,
+        ),
+    },
+    CurveDef {
+        id: CurveId::UpperArmRight,
+        name: "right upper-arm girth",
+        rule: section(
+            &[P::UpperArmRight, P::ShoulderRight, P::ElbowRight],
+            PlaneRule::Across,
+            LoopChoice::Nearest,
+            Axis::NegX,
+        ),
+    },
+    CurveDef {
+        id: CurveId::ElbowLeft,
+        name: "left elbow girth",
+        rule: section(&[P::ElbowLeft, P::ShoulderLeft, P::WristLeft], PlaneRule::Across, LoopChoice::Nearest, Axis::X),
+    },
+    CurveDef {
+        id: CurveId::ElbowRight,
+        name: "right elbow girth",
+        rule: section(
+            &[P::ElbowRight, P::ShoulderRight, P::WristRight],
+            PlaneRule::Across,
+            LoopChoice::Nearest,
+            Axis::NegX,
+        ),
+    },
+    CurveDef {
+        id: CurveId::WristLeft,
+        name: "left wrist girth",
+        rule: section(&[P::WristLeft, P::ElbowLeft, P::WristLeft], PlaneRule::Across, LoopChoice::Nearest, Axis::X),
+    },
+    CurveDef {
+        id: CurveId::WristRight,
+        name: "right wrist girth",
+        rule: section(
+            &[P::WristRight, P::ElbowRight, P::WristRight],
+            PlaneRule::Across,
+            LoopChoice::Nearest,
+            Axis::NegX,
+        ),
+    },
+    CurveDef {
+        id: CurveId::ArmLineLeft,
+        name: "left arm line",
+        rule: CurveRule::Path {
+            landmarks: &[P::ShoulderLeft, P::UpperArmLeft, P::ElbowLeft, P::WristLeft],
+            depth: Axis::Y,
+        },
+    },
+    CurveDef {
+        id: CurveId::ArmLineRight,
+        name: "right arm line",
+        rule: CurveRule::Path {
+            landmarks: &[P::ShoulderRight, P::UpperArmRight, P::ElbowRight, P::WristRight],
+            depth: Axis::Y,
+        },
+    },
 ];
+
+/// The arm curves (vocabulary version 3): derived only where their
+/// landmarks are given ([`optional_curve`]) — a landmarks file of version
+/// 2, a scan landmarked by hand for a skirt, has none — so that no body
+/// needs arms to be graded in a garment without sleeves.
+pub const ARM_CURVES: [CurveId; 8] = [
+    CurveId::UpperArmLeft,
+    CurveId::UpperArmRight,
+    CurveId::ElbowLeft,
+    CurveId::ElbowRight,
+    CurveId::WristLeft,
+    CurveId::WristRight,
+    CurveId::ArmLineLeft,
+    CurveId::ArmLineRight,
+];
+
+/// Whether a body may lack `curve` (and the points on it): the arm curves.
+pub fn optional_curve(curve: CurveId) -> bool {
+    ARM_CURVES.contains(&curve)
+}
+
+/// Whether a body may lack `point`: a point on an optional curve.
+pub fn optional_point(point: PointId) -> bool {
+    let d = point_def(point);
+    optional_curve(d.f1) || optional_curve(d.f2)
+}
 
 const fn pt(id: P, name: &'static str, f1: CurveId, f2: CurveId) -> PointDef {
     PointDef { id, name, f1, f2, pick: Pick::Landmark }
@@ -819,6 +951,12 @@ pub const POINTS: &[PointDef] = &[
         CurveId::LegSagittalRight,
         [0.0, 0.0, -1.0],
     ),
+    pt(P::UpperArmLeft, "left upper-arm point", CurveId::UpperArmLeft, CurveId::ArmLineLeft),
+    pt(P::UpperArmRight, "right upper-arm point", CurveId::UpperArmRight, CurveId::ArmLineRight),
+    pt(P::ElbowLeft, "left elbow point", CurveId::ElbowLeft, CurveId::ArmLineLeft),
+    pt(P::ElbowRight, "right elbow point", CurveId::ElbowRight, CurveId::ArmLineRight),
+    pt(P::WristLeft, "left wrist point", CurveId::WristLeft, CurveId::ArmLineLeft),
+    pt(P::WristRight, "right wrist point", CurveId::WristRight, CurveId::ArmLineRight),
 ];
 
 /// The registry entry of a curve.
@@ -832,10 +970,12 @@ pub fn point_def(id: PointId) -> &'static PointDef {
     &POINTS[id as usize]
 }
 
-/// The landmarks a scan must provide: every landmark named by a curve rule.
+/// The landmarks a scan must provide: every landmark named by the rule of
+/// a curve every body has (not the [`ARM_CURVES`]).
 pub fn required_landmarks() -> Vec<PointId> {
     let mut out: Vec<PointId> = CURVES
         .iter()
+        .filter(|c| !optional_curve(c.id))
         .flat_map(|c| match c.rule {
             CurveRule::Section { landmarks, .. } | CurveRule::Path { landmarks, .. } => landmarks.iter().copied(),
         })
@@ -871,7 +1011,15 @@ mod tests {
         let req = required_landmarks();
         for p in PointId::ALL {
             if !matches!(p, P::ChestFront | P::ChestBack) && point_def(*p).pick == Pick::Landmark {
-                assert!(req.contains(p), "{p} is not a landmark");
+                // the arms' points are landmarks of their (optional) curves
+                let optional = optional_point(*p)
+                    && CURVES.iter().any(|c| match c.rule {
+                        CurveRule::Section { landmarks, .. } | CurveRule::Path { landmarks, .. } => {
+                            optional_curve(c.id) && landmarks.contains(p)
+                        }
+                    });
+                assert!(req.contains(p) || optional, "{p} is not a landmark");
+                assert!(!(req.contains(p) && optional_point(*p)), "{p}: an optional point is not required");
             }
         }
     }

@@ -30,7 +30,16 @@
 //! * crotch: the lowest vertex on the sagittal plane (its own mirror);
 //! * armpits: on the coronal section through the upper-arm ring, walking
 //!   up the torso's side from bust height, the first local maximum of
-//!   height (where the torso's side meets the underside of the arm).
+//!   height (where the torso's side meets the underside of the arm);
+//! * arms (vocabulary version 3): the elbow at the end of MakeHuman's
+//!   `upperarm-length` measure, the wrist at the end of `lowerarm-length`,
+//!   the upper arm at the centroid of `upperarm-circ`; each moved to the
+//!   outermost point of the arm's section across its axis there (shoulder
+//!   point to elbow for the upper arm, shoulder to wrist at the elbow,
+//!   elbow to wrist at the wrist), outermost along `±Z × axis` — up and
+//!   away from the body within the coronal plane, where the arm line runs
+//!   over the top of the arm ([`outer_across`]). The right arm's from the
+//!   mirrored vertices.
 //!
 //! Failure modes: a ring that does not cross its plane (a corrupt model)
 //! gives [`LandmarkError`] naming the ring.
@@ -248,7 +257,58 @@ pub fn hm08_landmarks(
         let start_y = lm.points[&bust].y;
         lm.points.insert(id, armpit(&coronal, start_y, sign).ok_or_else(|| err(id, "no armpit above the bust"))?);
     }
+    // arms: MakeHuman's arm-length measures end at the elbow and the wrist
+    let end =
+        |name: &str, point: PointId| ring_ids(name).last().copied().ok_or_else(|| err(point, "no arm-length measure"));
+    let (elbow_v, wrist_v) = (end("upperarm-length", PointId::ElbowLeft)?, end("lowerarm-length", PointId::WristLeft)?);
+    let upper_ring = ring_ids("upperarm-circ");
+    for (sign, [shoulder, upper, elbow, wrist]) in [
+        (1.0, [PointId::ShoulderLeft, PointId::UpperArmLeft, PointId::ElbowLeft, PointId::WristLeft]),
+        (-1.0, [PointId::ShoulderRight, PointId::UpperArmRight, PointId::ElbowRight, PointId::WristRight]),
+    ] {
+        // the vertices on this side (the data's arm may be either: pick by x)
+        let on_side = |v: VertexId| {
+            let (a, b) = (mesh.position(v), mesh.position(model.mirror(v)));
+            if a.x * sign >= b.x * sign {
+                a
+            } else {
+                b
+            }
+        };
+        let s = lm.points[&shoulder];
+        let (e0, w0) = (on_side(elbow_v), on_side(wrist_v));
+        let ring_centre = {
+            let a = ring(mesh, upper_ring.iter().copied()).centroid();
+            let b = ring(mesh, upper_ring.iter().map(|&v| model.mirror(v))).centroid();
+            if a.x * sign >= b.x * sign {
+                a
+            } else {
+                b
+            }
+        };
+        let w = outer_across(mesh, w0, w0 - e0, sign).ok_or_else(|| err(wrist, "no section across the forearm"))?;
+        let e = outer_across(mesh, e0, w - s, sign).ok_or_else(|| err(elbow, "no section across the elbow"))?;
+        let u = outer_across(mesh, ring_centre, e - s, sign)
+            .ok_or_else(|| err(upper, "no section across the upper arm"))?;
+        lm.points.insert(upper, u);
+        lm.points.insert(elbow, e);
+        lm.points.insert(wrist, w);
+    }
     Ok(lm)
+}
+
+/// The outermost point of the arm's section across `axis` through `at`
+/// (the closed loop nearest `at`): farthest along `sign · (Z × axis)` (`sign`
+/// +1 for the left arm, −1 for the right), up and away from the body
+/// within the coronal plane. `None` where the plane misses the arm.
+fn outer_across(mesh: &TriMesh, at: DVec3, axis: DVec3, sign: f64) -> Option<DVec3> {
+    let plane = Plane::from_point_normal(at, axis)?;
+    let out = DVec3::Z.cross(axis) * sign;
+    let near = slice(mesh, &plane).into_iter().map(|s| s.polyline).filter(|p| p.closed).min_by(|a, b| {
+        let d = |p: &Polyline| p.closest(at).map_or(f64::INFINITY, |c| c.distance);
+        d(a).total_cmp(&d(b))
+    })?;
+    extreme(&near.points, |p| p.dot(out))
 }
 
 /// Why a thigh point below the crotch was not found.

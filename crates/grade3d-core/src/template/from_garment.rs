@@ -111,7 +111,7 @@ use super::format::{Below, Between, GradingDefaults, Relocation, Template};
 use super::garment_panels::{weld_panels, PanelError, PanelMesh, WeldOptions};
 use super::girth::{bridged, girth_plane, ring_curves, RING_PLANE_TOLERANCE_M};
 use crate::body::feature::FeatureBody;
-use crate::body::vocab::{point_def, CurveId, PointId, GIRTH_CURVES, POINTS};
+use crate::body::vocab::{optional_point, point_def, CurveId, PointId, GIRTH_CURVES, POINTS};
 use crate::geom::cut::split_by_plane;
 use crate::geom::flip::{lawson_flips, FlipOptions};
 use crate::geom::mesh::{boundary_loops, TriMesh, VertexId};
@@ -1778,7 +1778,8 @@ fn mirror_pairs(soup: &Soup, names: &[String], ax: &Axes, tolerance: f64) -> Vec
 /// lofted 4.6 cm above the hip on the design body came within 3 cm on a
 /// short man, pop39, and the two landed on one point), nor a point of
 /// another girth when the node lies within 1.5 × that tolerance of its plane
-/// (the pattern would draw a girth line through it).
+/// (the pattern would draw a girth line through it), nor an arm point (a
+/// body whose landmarks have no arms could not place the node).
 fn free_tie(
     p: DVec3,
     body: &FeatureBody,
@@ -1793,7 +1794,8 @@ fn free_tie(
         .iter()
         .filter(|(id, _)| {
             let d = point_def(**id);
-            !near_girth(d.f1) && !near_girth(d.f2)
+            // not an arm point: a body without arm landmarks could not place the node
+            !near_girth(d.f1) && !near_girth(d.f2) && !optional_point(**id)
         })
         .min_by(|a, b| a.1.position.distance(p).total_cmp(&b.1.position.distance(p)))
         .map(|(id, _)| *id)
