@@ -244,6 +244,43 @@ fn fit_chart(figure: FigureType) -> BTreeMap<MeasurementId, f64> {
     worst
 }
 
+/// Issue #18 item 5: a chart that gives the arms (upper-arm girth and arm
+/// length, as a retailer's chart for sleeves does) is fitted to them too:
+/// MakeHuman's arm measure modifiers are in the embedded model. Every
+/// target of every size within 5 mm, the arms' included; an arm girth out
+/// of its plausible range is named.
+#[test]
+fn a_chart_with_arms_is_fitted_to_them() {
+    let csv = "size,unit,stature,bust_girth,waist_girth,hip_girth,upper_arm_girth,arm_length\n\
+               34,cm,162,84,66,92,26,56\n36,cm,164,88,70,96,27,56.5\n38,cm,166,92,74,100,28,57\n\
+               40,cm,168,96,78,104,29.5,57.5\n42,cm,170,100,82,108,31,58\n44,cm,172,104,86,112,32.5,58.5\n";
+    let chart = parse_csv(csv, &SizeChartOptions::default()).unwrap();
+    let model = BodyModel::embedded().unwrap();
+    let opts = FitOptions::for_sex(chart.sex);
+    let mut worst: BTreeMap<MeasurementId, f64> = BTreeMap::new();
+    for row in &chart.rows {
+        let f = fit_size(model, row, &opts).unwrap();
+        assert_eq!(f.residuals.len(), row.targets.len());
+        for (id, r) in &f.residuals {
+            let e = r.error_mm().abs();
+            assert!(e <= 5.0, "size {}: {id} off by {e:.2} mm", row.size);
+            let w = worst.entry(*id).or_insert(0.0);
+            *w = w.max(e);
+        }
+        // and the fitted body measures so
+        let m = measure(&f.body, &Default::default());
+        for id in [MeasurementId::UpperArmGirth, MeasurementId::ArmLength] {
+            assert!((m[&id] - row.targets[&id]).abs() <= 5e-3, "size {}: {id} {}", row.size, m[&id]);
+        }
+    }
+    eprintln!("a chart with arms: worst residual per measurement (mm): {worst:.3?}");
+    let bad = csv.replace(",26,56\n", ",80,56\n");
+    match parse_csv(&bad, &SizeChartOptions::default()) {
+        Err(SizeChartError::OutOfRange { column, .. }) => assert_eq!(column, "upper_arm_girth"),
+        other => panic!("{other:?}"),
+    }
+}
+
 #[test]
 fn mens_chart_is_read_as_mens_and_fitted_from_a_male_body() {
     let text = std::fs::read_to_string(fixtures().join("size-charts/mens-36-46-in.csv")).unwrap();

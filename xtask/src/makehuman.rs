@@ -24,6 +24,7 @@ const SHIPPED: &[(&str, &str)] = &[
     ("buttocks", ""),
     ("pelvis", ""),
     ("breast", "breast-"),
+    ("arms", "measure-"),
 ];
 
 fn read_text(path: &Path) -> Result<String, DataError> {

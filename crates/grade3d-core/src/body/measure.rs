@@ -106,6 +106,14 @@ measurement_ids! {
     BackLength = "back_length",
     /// Front length: front neck point to front waist point along the centre front line.
     FrontLength = "front_length",
+    /// Upper-arm girth, left (5.3.16); on a body with arms (vocabulary 3).
+    UpperArmGirth = "upper_arm_girth",
+    /// Elbow girth, left (5.3.17).
+    ElbowGirth = "elbow_girth",
+    /// Wrist girth, left (5.3.19).
+    WristGirth = "wrist_girth",
+    /// Arm length: shoulder point over the elbow to the wrist point along the arm line, left.
+    ArmLength = "arm_length",
 }
 
 impl fmt::Display for MeasurementId {
@@ -158,6 +166,9 @@ impl MeasurementId {
             MeasurementId::KneeGirth => CurveId::KneeLeft,
             MeasurementId::AnkleGirth => CurveId::AnkleLeft,
             MeasurementId::ArmscyeGirth => CurveId::ArmscyeLeft,
+            MeasurementId::UpperArmGirth => CurveId::UpperArmLeft,
+            MeasurementId::ElbowGirth => CurveId::ElbowLeft,
+            MeasurementId::WristGirth => CurveId::WristLeft,
             _ => return None,
         })
     }
@@ -173,6 +184,9 @@ impl MeasurementId {
             CurveId::KneeRight => CurveId::KneeLeft,
             CurveId::AnkleRight => CurveId::AnkleLeft,
             CurveId::ArmscyeRight => CurveId::ArmscyeLeft,
+            CurveId::UpperArmRight => CurveId::UpperArmLeft,
+            CurveId::ElbowRight => CurveId::ElbowLeft,
+            CurveId::WristRight => CurveId::WristLeft,
             c => c,
         };
         MeasurementId::ALL.iter().copied().find(|m| m.girth_curve() == Some(left))
@@ -269,6 +283,12 @@ pub fn measure(body: &FeatureBody, opts: &MeasureOptions) -> Measurements {
     {
         m.insert(MeasurementId::FrontLength, arc_between(line, a, b));
     }
+    // a body with arms (their landmarks given)
+    if let (Some(line), Some(a), Some(b)) =
+        (curve(CurveId::ArmLineLeft), p(PointId::ShoulderLeft), p(PointId::WristLeft))
+    {
+        m.insert(MeasurementId::ArmLength, arc_between(line, a, b));
+    }
     m
 }
 
@@ -291,5 +311,8 @@ mod tests {
         assert!(M::governing(PointId::Crotch).is_empty());
         assert_eq!(M::girth_along(CurveId::ArmscyeRight), Some(M::ArmscyeGirth));
         assert_eq!(M::girth_along(CurveId::CentreFront), None);
+        // the arms: a right arm's girths read against the chart's (left) ones
+        assert_eq!(M::governing(PointId::ElbowRight), [M::ElbowGirth]);
+        assert_eq!(M::governing(PointId::UpperArmLeft), [M::UpperArmGirth]);
     }
 }

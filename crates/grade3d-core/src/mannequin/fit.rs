@@ -216,8 +216,23 @@ pub struct FittedMannequin {
     pub scale_jacobian: Option<ScaleJacobian>,
 }
 
-/// The local modifier that moves a measurement, if any.
+/// The local modifiers that move a measurement: [`modifier_for`]'s, and for
+/// the arm length both MakeHuman's upper- and lower-arm lengths (an arm
+/// lengthened at the shoulder alone would move its elbow).
+pub fn modifiers_for(id: MeasurementId) -> &'static [&'static str] {
+    match id {
+        MeasurementId::ArmLength => &["arms/measure-upperarm-length", "arms/measure-lowerarm-length"],
+        MeasurementId::UpperArmGirth => &["arms/measure-upperarm-circ"],
+        _ => &[],
+    }
+}
+
+/// The local modifier that moves a measurement, if any (the first of
+/// [`modifiers_for`]).
 pub fn modifier_for(id: MeasurementId) -> Option<&'static str> {
+    if let Some(first) = modifiers_for(id).first() {
+        return Some(first);
+    }
     use MeasurementId as M;
     Some(match id {
         M::NeckBaseGirth => "neck/measure-neck-circ",
@@ -353,7 +368,8 @@ pub fn fit_size(model: &BodyModel, row: &SizeRow, opts: &FitOptions) -> Result<F
     if row.targets.contains_key(&MeasurementId::Stature) {
         vars.push(Var::Height);
     }
-    let mods: BTreeSet<&'static str> = ids.iter().filter_map(|&id| modifier_for(id)).collect();
+    let mods: BTreeSet<&'static str> =
+        ids.iter().flat_map(|&id| modifier_for(id).into_iter().chain(modifiers_for(id).iter().copied())).collect();
     let available = model.modifier_names();
     vars.extend(mods.into_iter().filter(|m| available.iter().any(|a| a == m)).map(Var::Modifier));
     let x0: Vec<f64> = vars

@@ -272,6 +272,10 @@ pub fn plausible_range_cm(id: MeasurementId) -> (f64, f64) {
         M::ShoulderLength => (7.0, 25.0),
         M::BackLength => (28.0, 60.0),
         M::FrontLength => (22.0, 55.0),
+        M::UpperArmGirth => (15.0, 60.0),
+        M::ElbowGirth => (15.0, 45.0),
+        M::WristGirth => (10.0, 30.0),
+        M::ArmLength => (40.0, 90.0),
     }
 }
 
