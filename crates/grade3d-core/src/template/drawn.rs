@@ -293,8 +293,15 @@ pub struct ShiftDressOptions {
     pub chest_ease_mm: f64,
     /// Bust ease, mm. Default 80.
     pub bust_ease_mm: f64,
-    /// Waist ease, mm: a shift is not shaped at the waist. Default 150.
+    /// Waist ease, mm, where the dress is drawn through the eased waist
+    /// ([`ShiftDressOptions::waist_line`]). Default 150.
     pub waist_ease_mm: f64,
+    /// Draw the dress through the eased waist; false: straight from the
+    /// bust to the hip, as a shift hangs (not shaped at the waist). Default
+    /// true (false smooths the drawn surface, but its template, graded on
+    /// the design body, folds the back at the left underarm: issue #18's
+    /// notes).
+    pub waist_line: bool,
     /// Hip ease, mm. Default 60.
     pub hip_ease_mm: f64,
     /// Hem below the hip line, m. Default 0.30.
@@ -319,6 +326,7 @@ impl Default for ShiftDressOptions {
             chest_ease_mm: 80.0,
             bust_ease_mm: 80.0,
             waist_ease_mm: 150.0,
+            waist_line: true,
             hip_ease_mm: 60.0,
             length_below_hip_m: 0.30,
             hem_flare_mm: 40.0,
@@ -333,12 +341,13 @@ impl Default for ShiftDressOptions {
 /// The sleeveless shift dress drawn as curves: a jewel neckline on the
 /// eased neck base, shoulder seams over the shoulder lines, armholes
 /// along the body's armscyes from the eased chest's side points to the
-/// shoulder points, the eased chest, bust, waist and hip, and a hem
-/// dropped from the hip. Two pieces, front and back, each in three
-/// columns split at the side neck points' lateral planes (so the shoulder
-/// seams and the neckline are whole sides of patches) and in bands
-/// between the girths: shoulder–chest, chest–bust, bust–waist, waist–hip,
-/// hip–hem. Seams: the shoulders and the sides.
+/// shoulder points, the eased chest, bust and hip (and waist, with
+/// [`ShiftDressOptions::waist_line`]), and a hem dropped from the hip. Two
+/// pieces, front and back, each in three columns split at the side neck
+/// points' lateral planes (so the shoulder seams and the neckline are whole
+/// sides of patches) and in bands between the girths: shoulder–chest,
+/// chest–bust, bust–hip (bust–waist, waist–hip), hip–hem. Seams: the
+/// shoulders and the sides.
 ///
 /// # Errors
 /// [`AuthorError::Missing`]: a girth, side point, neck or shoulder point,
@@ -356,11 +365,15 @@ pub fn shift_dress_curves(body: &FeatureBody, o: &ShiftDressOptions) -> Result<V
     ];
     let mut rings = Vec::new();
     for (curve, ease, l, r) in girths {
+        if curve == CurveId::Waist && !o.waist_line {
+            continue;
+        }
         let ring = d.ring(curve, ease)?;
         let sides = d.sides(&ring, l, r)?;
         rings.push((ring, sides));
     }
-    let hip_centre = rings[3].0.centre;
+    let last = rings.len() - 1;
+    let hip_centre = rings[last].0.centre;
     // the columns' planes: the side neck points' lateral positions on the eased neck
     let (nl, nr) = d.sides(&neck, PointId::NeckLeft, PointId::NeckRight)?;
     let neck_left = d.cast(&neck, nl);
@@ -384,8 +397,8 @@ pub fn shift_dress_curves(body: &FeatureBody, o: &ShiftDressOptions) -> Result<V
             hem: false,
         })
         .collect();
-    let hip = levels[3].ring;
-    levels.push(Level { ring: hip, front: levels[3].front, back: levels[3].back, hem: true });
+    let hip = levels[last].ring;
+    levels.push(Level { ring: hip, front: levels[last].front, back: levels[last].back, hem: true });
     let at = |lv: &Level, a: f64| {
         let p = d.cast(lv.ring, a);
         if lv.hem {
@@ -552,4 +565,27 @@ pub fn shift_dress(body: &FeatureBody, o: &ShiftDressOptions) -> Result<Template
         .into();
     t.design_body = Some(DesignBody::Reference);
     Ok(t)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_shift_without_its_waist_line_has_one_band_fewer_in_each_column() {
+        let body = super::super::library::reference_body().expect("the reference body");
+        let with = shift_dress_curves(&body, &ShiftDressOptions::default()).expect("drawn");
+        let without =
+            shift_dress_curves(&body, &ShiftDressOptions { waist_line: false, ..Default::default() }).expect("drawn");
+        // front and back: 3 shoulder-band patches, then 3 columns a band (chest–bust, bust–waist,
+        // waist–hip, hip–hem; without the waist line bust–hip)
+        assert_eq!((with.len(), without.len()), (2 * (3 + 3 * 4), 2 * (3 + 3 * 3)));
+        // every patch's sides meet at its corners (to rounding)
+        let apart = |a: [f64; 3], b: [f64; 3]| DVec3::from_array(a).distance(DVec3::from_array(b));
+        for p in with.iter().chain(&without) {
+            assert!(apart(p.bottom[0], p.left[0]) < 1e-12, "{}", p.name);
+            assert!(apart(p.top[0], p.left[p.left.len() - 1]) < 1e-12, "{}", p.name);
+            assert!(apart(p.bottom[p.bottom.len() - 1], p.right[0]) < 1e-12, "{}", p.name);
+        }
+    }
 }
