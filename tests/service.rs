@@ -771,6 +771,15 @@ fn answers_validate_against_the_generated_schemas() {
         serde_json::json!(["a-line-skirt", "fitted-bodice", "straight-skirt", "trousers"])
     );
     assert_eq!(point("knee_left")["templates"], serde_json::json!(["a-line-skirt", "trousers"]));
+    // the arms (vocabulary 3): landmarks of their optional curves, not required of a document
+    assert_eq!(
+        (point("elbow_left")["landmark"].clone(), point("elbow_left")["optional"].clone()),
+        (false.into(), true.into())
+    );
+    assert_eq!(point("hip_left")["optional"], false);
+    let curve = |id: &str| vocab["curves"].as_array().unwrap().iter().find(|c| c["id"] == id).unwrap().clone();
+    assert_eq!(curve("arm_line_left")["optional"], true);
+    assert_eq!(curve("arm_line_left")["landmarks"].as_array().unwrap().len(), 4);
     // every fixture's landmarks document answers the schema; an unknown ID, a missing
     // required landmark and a 2D point do not
     for body in ["male-average-asian", "female-average-caucasian"] {

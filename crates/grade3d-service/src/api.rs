@@ -516,6 +516,9 @@ pub struct VocabularyPoint {
     pub name: String,
     /// Whether a landmarks document must give it.
     pub landmark: bool,
+    /// Whether a body may lack it: a point of the arms (vocabulary 3), derived where the arm
+    /// landmarks (`upper_arm_*`, `elbow_*`, `wrist_*`) are given, which garments with sleeves need.
+    pub optional: bool,
     /// The two curves it lies on.
     pub curves: [String; 2],
     /// The live templates with a node on it.
@@ -531,6 +534,8 @@ pub struct VocabularyCurve {
     pub name: String,
     /// The landmarks it is derived from (none: it follows from other curves).
     pub landmarks: Vec<String>,
+    /// Whether a body may lack it (the arms): derived only where all its landmarks are given.
+    pub optional: bool,
 }
 
 /// Adds the API-key security scheme.

@@ -603,6 +603,7 @@ fn vocabulary(templates: &[crate::template::format::Template]) -> api::Vocabular
                 id: p.id.as_str().to_owned(),
                 name: p.name.to_owned(),
                 landmark: landmarks.contains(&p.id),
+                optional: crate::body::vocab::optional_point(p.id),
                 curves: [p.f1.as_str().to_owned(), p.f2.as_str().to_owned()],
                 templates: templates
                     .iter()
@@ -619,6 +620,7 @@ fn vocabulary(templates: &[crate::template::format::Template]) -> api::Vocabular
                 landmarks: match c.rule {
                     CurveRule::Section { landmarks, .. } | CurveRule::Path { landmarks, .. } => ids(landmarks),
                 },
+                optional: crate::body::vocab::optional_curve(c.id),
             })
             .collect(),
     }
