@@ -27,8 +27,7 @@ use crate::body::feature::FeatureBody;
 use crate::body::frame::{FrameHints, FrameReport, Units};
 use crate::io::garment::{read_garment, scaled, GarmentFileError};
 use crate::io::gltf::GltfReadOptions;
-use crate::mannequin::size_chart::{parse_csv, parse_json, SizeChart, SizeChartOptions};
-use crate::results::content_id;
+use crate::mannequin::size_chart::{parse_json, SizeChart, SizeChartOptions};
 use crate::store::StoredScan;
 use crate::template::format::Template;
 use crate::template::from_curves::{panels_from_curves, CurvePanel, CurvesOptions, FromCurvesError};
@@ -203,16 +202,14 @@ pub fn chart_size(
     opts: &SizeChartOptions,
     (chart_field, size_field): (&str, &str),
 ) -> Result<DesignBody, Problem> {
+    // a multipart part or a file is text: JSON where it opens as an object, else CSV
     let parsed: SizeChart = match chart {
-        serde_json::Value::String(csv) if csv.trim_start().starts_with('{') => parse_json(csv, opts),
-        serde_json::Value::String(csv) => parse_csv(csv, opts),
-        serde_json::Value::Object(_) => parse_json(&chart.to_string(), opts),
-        _ => {
-            return Err(Problem::bad_request("chart-type", "the chart is a JSON size chart object or CSV text")
-                .field(chart_field))
+        serde_json::Value::String(text) if text.trim_start().starts_with('{') => {
+            parse_json(text, opts).map_err(|e| super::errors::chart_problem(&e))
         }
+        other => super::parse_chart_with(*opts, other, None),
     }
-    .map_err(|e| super::errors::chart_problem(&e).field(chart_field))?;
+    .map_err(|p| p.field(chart_field))?;
     let row = parsed.rows.iter().find(|r| r.size == size).ok_or_else(|| {
         let sizes: Vec<&str> = parsed.rows.iter().map(|r| r.size.as_str()).collect();
         Problem::bad_request("unknown-size", format!("the chart has no size `{size}`; it has: {}", sizes.join(", ")))
@@ -313,11 +310,7 @@ pub fn author(s: &AppState, parts: &AuthorParts) -> Result<(Template, Authored),
         }
         PartsBody::Scan(scan) => {
             let read = super::edit::read_design_scan(s, scan)?;
-            let header = serde_json::to_vec(&(&scan.landmarks, &scan.hints)).map_err(|e| {
-                tracing::error!(error = %e, "design scan header");
-                Problem::internal()
-            })?;
-            let id = content_id(&[b"design-scan", &header, &scan.glb]);
+            let id = scan.content_id()?;
             let frame = read.scan.frame;
             let authored = author_on(parts, &read.body, DesignBody::Scan { id: id.clone() }, Some(frame))?;
             s.0.store.put_scan(&id, scan)?;

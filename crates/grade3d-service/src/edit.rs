@@ -137,17 +137,6 @@ pub fn design_body(s: &AppState, which: &DesignBody) -> Result<Arc<FeatureBody>,
         return Ok(body);
     }
     let body = match which {
-        DesignBody::ChartSize { sex, row } => {
-            let model = crate::mannequin::model::BodyModel::embedded().map_err(|e| internal(&e))?;
-            crate::mannequin::fit::fit_size(model, row, &crate::mannequin::fit::FitOptions::for_sex(*sex))
-                .map_err(|source| {
-                    renamed(
-                        Problem::from(crate::work::WorkError::Fit { size: row.size.clone(), source }),
-                        &[("chart", "body_chart")],
-                    )
-                })?
-                .body
-        }
         DesignBody::Scan { id } => {
             let scan = s.0.store.get_scan(id)?.ok_or_else(|| {
                 Problem::unprocessable("design-body-unknown-scan", format!("no stored design scan `{id}`"))
@@ -155,7 +144,14 @@ pub fn design_body(s: &AppState, which: &DesignBody) -> Result<Arc<FeatureBody>,
             })?;
             read_design_scan(s, &scan)?.body
         }
-        _ => return builtin_body(which).map_err(|e| internal(&e)),
+        // a chart's size: the core's fit; a size that cannot be fitted is the request's fault
+        _ => crate::template::from_garment::design_body(which).map_err(|e| match (e, which) {
+            (crate::template::library::AuthorError::Fit(source), DesignBody::ChartSize { row, .. }) => renamed(
+                Problem::from(crate::work::WorkError::Fit { size: row.size.clone(), source }),
+                &[("chart", "body_chart")],
+            ),
+            (e, _) => internal(&e),
+        })?,
     };
     let body = Arc::new(body);
     s.0.design_bodies.keep(key, body.clone());

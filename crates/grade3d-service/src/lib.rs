@@ -932,7 +932,7 @@ fn parse_chart(s: &AppState, chart: &serde_json::Value, figure: Option<FigureTyp
 
 /// A request's size chart (JSON document or CSV text) read with `opts`
 /// (`figure`, when given, for ASTM waist columns).
-fn parse_chart_with(
+pub(crate) fn parse_chart_with(
     mut opts: SizeChartOptions,
     chart: &serde_json::Value,
     figure: Option<FigureType>,

@@ -60,6 +60,15 @@ impl StoredScan {
         Ok(out)
     }
 
+    /// The content id it is kept under: of its stored bytes (GLB, landmarks
+    /// and hints alike).
+    ///
+    /// # Errors
+    /// [`StoreError::Database`] (a header that cannot be written).
+    pub fn content_id(&self) -> Result<String, StoreError> {
+        Ok(crate::results::content_id(&[b"design-scan", &self.to_bytes()?]))
+    }
+
     fn from_bytes(bytes: &[u8]) -> Result<Self, StoreError> {
         let corrupt = || StoreError::Database("a stored scan is corrupt".into());
         let len = u32::from_le_bytes(bytes.get(..4).ok_or_else(corrupt)?.try_into().map_err(|_| corrupt())?);

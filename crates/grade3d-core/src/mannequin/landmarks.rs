@@ -266,26 +266,15 @@ pub fn hm08_landmarks(
         (1.0, [PointId::ShoulderLeft, PointId::UpperArmLeft, PointId::ElbowLeft, PointId::WristLeft]),
         (-1.0, [PointId::ShoulderRight, PointId::UpperArmRight, PointId::ElbowRight, PointId::WristRight]),
     ] {
-        // the vertices on this side (the data's arm may be either: pick by x)
-        let on_side = |v: VertexId| {
-            let (a, b) = (mesh.position(v), mesh.position(model.mirror(v)));
-            if a.x * sign >= b.x * sign {
-                a
-            } else {
-                b
-            }
-        };
+        // of a position and its mirror image, the one on this side (the data's arm may be either)
+        let this_side = |a: DVec3, b: DVec3| if a.x * sign >= b.x * sign { a } else { b };
+        let on_side = |v: VertexId| this_side(mesh.position(v), mesh.position(model.mirror(v)));
         let s = lm.points[&shoulder];
         let (e0, w0) = (on_side(elbow_v), on_side(wrist_v));
-        let ring_centre = {
-            let a = ring(mesh, upper_ring.iter().copied()).centroid();
-            let b = ring(mesh, upper_ring.iter().map(|&v| model.mirror(v))).centroid();
-            if a.x * sign >= b.x * sign {
-                a
-            } else {
-                b
-            }
-        };
+        let ring_centre = this_side(
+            ring(mesh, upper_ring.iter().copied()).centroid(),
+            ring(mesh, upper_ring.iter().map(|&v| model.mirror(v))).centroid(),
+        );
         let w = outer_across(mesh, w0, w0 - e0, sign).ok_or_else(|| err(wrist, "no section across the forearm"))?;
         let e = outer_across(mesh, e0, w - s, sign).ok_or_else(|| err(elbow, "no section across the elbow"))?;
         let u = outer_across(mesh, ring_centre, e - s, sign)
