@@ -10,6 +10,21 @@
 //! options; `NODES=1` lists how each node is placed; `TEMPLATE=a-line-skirt`
 //! probes that built-in template on its reference body instead; `LINES=1`
 //! prints each piece's internal lines and their problems.)
+//!
+//! The live shift dress: `TEMPLATE=live:shift-dress` draws it with `DOPTS`
+//! (JSON `ShiftDressOptions`) and authors it with `GOPTS` (JSON overriding
+//! `drawn::garment_options()`), printing its drawn pieces flattened as they
+//! are and, for the design body, the graded surface's signed distance from
+//! the designed one by height above the hip (with `DUMP=dir`, per vertex
+//! in `dir/deviation.txt`, and each flattened piece's triangle strains in
+//! `dir/strain-<piece>.txt`). `SURFACE=path` writes the drawn OBJ, `FLAT_ONLY=1` stops there;
+//! `REFIT=k` adds nodes where the graded surface strays most, `k` rounds.
+//! Any template: `SVG=dir` writes each grade's pieces, `GRADED=dir` each
+//! graded surface (OBJ), `COARSE=path` the coarse mesh on its design body,
+//! `PANELS=1` flattens the graded panels freely (as the drawn ones), and
+//! `NOCOLL=1`, `UNGUIDED=1`, `FREE_SEAMS=1`, `LEVELS=n` turn off collision
+//! on the design body, the guided dart rules, the seam negotiation, or set
+//! the subdivision levels.
 
 use grade3d::body::derive::Landmarks;
 use grade3d::body::derive::{derive_features, DeriveOptions};
@@ -63,9 +78,67 @@ fn main() {
             if let Ok(path) = std::env::var("SURFACE") {
                 std::fs::write(path, grade3d::io::obj::write_obj_panels(&pieces, "live dress")).unwrap();
             }
-            author_from_garment("shift-dress", &pieces, &design, &grade3d::template::drawn::garment_options())
-                .unwrap()
-                .template
+            flat_report(&pieces);
+            if std::env::var("FLAT_ONLY").is_ok() {
+                return;
+            }
+            let mut o = grade3d::template::drawn::garment_options();
+            if let Ok(j) = std::env::var("GOPTS") {
+                let mut v = serde_json::to_value(&o).unwrap();
+                let over: serde_json::Value = serde_json::from_str(&j).unwrap();
+                for (k, x) in over.as_object().unwrap() {
+                    v[k] = x.clone();
+                }
+                o = serde_json::from_value(v).unwrap();
+            }
+            let mut a = author_from_garment("shift-dress", &pieces, &design, &o).unwrap();
+            // REFIT=k: k rounds of nodes added where the refined surface strays most from the designed one
+            let rounds: usize = std::env::var("REFIT").map(|r| r.parse().unwrap()).unwrap_or(0);
+            for round in 0..rounds {
+                use grade3d::geom::query::SphereIndex;
+                let g = grade_with_darts(
+                    &a.template,
+                    &design,
+                    None,
+                    "design",
+                    &GradeOptions::default(),
+                    DartSource::Decide,
+                )
+                .unwrap();
+                let si = SphereIndex::new(&a.surface);
+                let mut far: Vec<(f64, glam::DVec3)> = g
+                    .mesh
+                    .positions
+                    .iter()
+                    .map(|&q| {
+                        let c = si.closest_point(&a.surface, q);
+                        (c.distance, c.point)
+                    })
+                    .collect();
+                far.sort_by(|x, y| y.0.total_cmp(&x.0));
+                let spacing = 0.6 * o.max_edge_mm * 1e-3;
+                let tol = 2.0e-3;
+                let mut existing: Vec<glam::DVec3> =
+                    a.template.nodes.iter().map(|n| glam::DVec3::from_array(n.reference)).collect();
+                let mut added = 0;
+                for (d, p) in far {
+                    if d < tol || added >= 12 {
+                        break;
+                    }
+                    if existing.iter().all(|e| e.distance(p) > spacing) {
+                        o.nodes.push(p.to_array());
+                        existing.push(p);
+                        added += 1;
+                    }
+                }
+                println!("refit round {round}: {added} nodes added");
+                if added == 0 {
+                    break;
+                }
+                a = author_from_garment("shift-dress", &pieces, &design, &o).unwrap();
+            }
+            let _ = SURFACE_OF.set(a.surface.clone());
+            a.template
         }
         Ok(name) if name.starts_with("drawn:") => {
             // a drawn style authored here: `GOPTS` (JSON) overrides the authoring options
@@ -84,6 +157,29 @@ fn main() {
         }
         Err(_) => author_from_garment("helper-skirt", &[piece], &design, &GarmentOptions::default()).unwrap().template,
     };
+    let mut t = t;
+    if std::env::var("UNGUIDED").is_ok() {
+        t.defaults.guided_darts = false;
+    }
+    if let Ok(path) = std::env::var("COARSE") {
+        // the template's coarse mesh on its design body
+        let mut obj = String::new();
+        for n in &t.nodes {
+            obj += &format!("v {} {} {}\n", n.reference[0], n.reference[1], n.reference[2]);
+        }
+        for f in &t.faces {
+            let e = |k: usize| {
+                let d = &t.edges[f.edges[k] as usize];
+                if f.directions[k] > 0 {
+                    d.start
+                } else {
+                    d.end
+                }
+            };
+            obj += &format!("f {} {} {}\n", e(0) + 1, e(1) + 1, e(2) + 1);
+        }
+        std::fs::write(path, obj).unwrap();
+    }
     if std::env::var("NODES").is_ok() {
         let hip = girth_plane(&design, CurveId::Hip).unwrap();
         for (i, n) in t.nodes.iter().enumerate() {
@@ -106,11 +202,40 @@ fn main() {
         }
     }
     let mut go = GradeOptions::default();
+    if let Ok(l) = std::env::var("LEVELS") {
+        go.levels = Some(l.parse().unwrap());
+    }
+    if std::env::var("FREE_SEAMS").is_ok() {
+        go.pattern.negotiate_seams = false;
+    }
     if let Ok(a) = std::env::var("AUTO") {
         go.pattern.auto_darts = serde_json::from_str(&a).unwrap();
     }
     let design_obstacle = obstacle(&design);
-    let g = grade_with_darts(&t, &design, Some(&design_obstacle), "design", &go, DartSource::Decide).unwrap();
+    if std::env::var("PANELS").is_ok() {
+        // the graded surface cut into its panels, each flattened freely (as the drawn pieces are)
+        let g = grade_with_darts(&t, &design, None, "design", &go, DartSource::Decide).unwrap();
+        let (panels, _) = grade3d::pattern::panels::cut(&t, &g.cut_positions, &g.mesh.triangles, &g.lineage).unwrap();
+        let pieces: Vec<PanelMesh> = panels
+            .iter()
+            .map(|p| PanelMesh {
+                name: format!("graded-{}", p.name),
+                positions: p.positions.iter().copied().collect(),
+                triangles: p.triangles.iter().map(|t| t.map(|v| usize::from(v) as u32)).collect(),
+                uv: Vec::new(),
+            })
+            .collect();
+        flat_report(&pieces);
+    }
+    let g = grade_with_darts(
+        &t,
+        &design,
+        if std::env::var("NOCOLL").is_ok() { None } else { Some(&design_obstacle) },
+        "design",
+        &go,
+        DartSource::Decide,
+    )
+    .unwrap();
     let plan = g.pattern.dart_plan.clone();
     print(&design, "design", &g);
     let decide = std::env::var("DECIDE").is_ok();
@@ -155,7 +280,63 @@ fn main() {
     }
 }
 
+static SURFACE_OF: std::sync::OnceLock<grade3d::geom::mesh::TriMesh> = std::sync::OnceLock::new();
+
 fn print(body: &FeatureBody, name: &str, g: &Graded) {
+    if let (Some(surface), "design") = (SURFACE_OF.get(), name) {
+        // graded → designed, signed outwards (from the body's vertical axis), by height above the hip
+        use grade3d::geom::query::SphereIndex;
+        let hip = girth_plane(body, CurveId::Hip).unwrap();
+        let si = SphereIndex::new(surface);
+        let ring = &body.curves[&CurveId::Hip].polyline.points;
+        let centre = ring.iter().copied().sum::<glam::DVec3>() / ring.len() as f64;
+        let graded = g.cut_mesh().unwrap();
+        let mut bands: std::collections::BTreeMap<i64, Vec<f64>> = Default::default();
+        let mut far: std::collections::BTreeMap<(i64, i64), usize> = Default::default();
+        let mut dump = String::new();
+        for &q in graded.positions() {
+            let c = si.closest_point(surface, q);
+            let h = hip.signed_distance(q);
+            let axis = centre + hip.normal * (h - hip.signed_distance(centre));
+            let out = (c.point - axis - hip.normal * (c.point - axis).dot(hip.normal)).normalize_or_zero();
+            let dist = (q - c.point).dot(out) * 1e3;
+            dump += &format!("{} {} {} {dist}\n", q.x, q.y, q.z);
+            bands.entry((h * 1e3 / 40.0).floor() as i64).or_default().push(dist);
+            if dist.abs() > 4.0 {
+                // angle round the body: 0 its left, 90 its front
+                let ang = out.z.atan2(out.x).to_degrees();
+                *far.entry(((h * 1e3 / 40.0).floor() as i64 * 40, (ang / 30.0).round() as i64 * 30)).or_insert(0) += 1;
+            }
+        }
+        for (b, v) in &bands {
+            let mean = v.iter().sum::<f64>() / v.len() as f64;
+            let mut a: Vec<f64> = v.iter().map(|x| x.abs()).collect();
+            a.sort_by(f64::total_cmp);
+            println!(
+                "  band {:+5} mm: n {:5} signed mean {:+6.2} |p95| {:5.2}",
+                b * 40,
+                v.len(),
+                mean,
+                a[a.len() * 95 / 100]
+            );
+        }
+        println!("  over 4 mm (height, angle): {far:?}");
+        if let Ok(dir) = std::env::var("DUMP") {
+            std::fs::write(format!("{dir}/deviation.txt"), dump).unwrap();
+        }
+    }
+    if let Ok(dir) = std::env::var("GRADED") {
+        // the graded surface, one OBJ a body
+        let mut obj = String::new();
+        for p in &g.mesh.positions {
+            obj += &format!("v {} {} {}\n", p.x, p.y, p.z);
+        }
+        obj += "g graded\n";
+        for t in &g.mesh.triangles {
+            obj += &format!("f {} {} {}\n", usize::from(t[0]) + 1, usize::from(t[1]) + 1, usize::from(t[2]) + 1);
+        }
+        std::fs::write(format!("{dir}/{}-graded.obj", name.replace('/', "-")), obj).unwrap();
+    }
     if let Ok(dir) = std::env::var("SVG") {
         let svg = grade3d::pattern::export::svg::pieces_svg(&g.pattern.pieces, &Default::default());
         std::fs::write(format!("{dir}/{}.svg", name.replace('/', "-")), svg).unwrap();
@@ -218,4 +399,35 @@ fn print(body: &FeatureBody, name: &str, g: &Graded) {
             fd.map_or(f64::NAN, |f| f.intake_mm)
         );
     }
+}
+
+/// Each drawn piece flattened as it is (no template, no grade): its p95 edge strain.
+fn flat_report(pieces: &[PanelMesh]) {
+    use grade3d::pattern::flatten::{distortion, flatten, FlattenOptions};
+    use grade3d::pattern::panels::{PanelFace, PanelVertex};
+    use typed_index_collections::TiVec;
+    let mut line = "drawn surface flattened:".to_string();
+    for p in pieces {
+        let pos: TiVec<PanelVertex, glam::DVec3> = p.positions.iter().copied().collect();
+        let tri: TiVec<PanelFace, [PanelVertex; 3]> =
+            p.triangles.iter().map(|t| t.map(|i| PanelVertex::from(i as usize))).collect();
+        let f = flatten(&pos, &tri, &FlattenOptions::default()).unwrap();
+        let d = distortion(&pos, &tri, &f.uv);
+        // per triangle: its 3D centroid, its flat centroid, and its worst edge strain
+        let mut dump = String::new();
+        for t in &tri {
+            let [a, b, c] = t.map(|v| (pos[v], f.uv[v]));
+            let worst = [(a, b), (b, c), (c, a)]
+                .iter()
+                .map(|(x, y)| (y.1.distance(x.1) / y.0.distance(x.0) - 1.0).abs())
+                .fold(0.0, f64::max);
+            let (c3, c2) = ((a.0 + b.0 + c.0) / 3.0, (a.1 + b.1 + c.1) / 3.0);
+            dump += &format!("{} {} {} {} {} {}\n", c3.x, c3.y, c3.z, c2.x, c2.y, worst);
+        }
+        if let Ok(dir) = std::env::var("DUMP") {
+            std::fs::write(format!("{dir}/strain-{}.txt", p.name), dump).unwrap();
+        }
+        line += &format!(" {}:{:.2}%", p.name, d.strain_p95 * 100.0);
+    }
+    println!("{line}");
 }

@@ -624,3 +624,113 @@ fn a_pieces_grain_comes_from_its_pattern_layout() {
         }
     }
 }
+
+/// Regression (issue #18): with `keep_crossings`, a seam that crosses a
+/// girth line away from the girth's feature points keeps its crossing. The
+/// literal failing input: the shift dress drawn with princess seams, whose
+/// seams cross the bust line 11 mm from `bust_front_left` (the chest line
+/// 17 mm from `chest_back_left`). The crossing took that point's ring node,
+/// and decoding placed ring nodes at their points: the node jumped along
+/// the ring, off its seam (11.4 mm), and every graded seam stepped there.
+/// Each such node now keeps its place along the girth (`ring_shift`, a
+/// fraction of the girth's length), so decoding on the design body puts it
+/// back on its seam. Also: `ease_at` limits the girth lines to those named,
+/// and an unknown name is refused naming it.
+#[test]
+fn a_seam_crossing_a_girth_line_away_from_its_points_stays_on_the_seam() {
+    use grade3d::body::vocab::{point_def, CurveId};
+    use grade3d::template::drawn::{self, ShiftDressOptions};
+    use grade3d::template::from_garment::FromGarmentError;
+    use grade3d::template::girth::{girth_plane, RING_PLANE_TOLERANCE_M};
+    let body = grade3d::template::library::reference_body().unwrap();
+    let o = ShiftDressOptions { princess_seams: true, smooth_columns: true, ..Default::default() };
+    let pieces = drawn::shift_dress_surface(&body, &o).unwrap();
+    let mut opts = drawn::garment_options();
+    opts.keep_crossings = true;
+    opts.ease_at = vec!["bust".into(), "waist".into(), "hip".into()];
+    let a = author_from_garment("princess-dress", &pieces, &body, &opts).unwrap();
+    let t = &a.template;
+    // only the girths named are girth lines
+    assert_eq!(t.ease_mm.keys().collect::<Vec<_>>(), ["bust", "hip", "waist"], "{:?}", t.ease_mm);
+    // the designed garment's seams: its pieces' outline edges
+    let outline: Vec<(glam::DVec3, glam::DVec3)> = pieces
+        .iter()
+        .flat_map(|p| {
+            let mut count = std::collections::BTreeMap::new();
+            for tri in &p.triangles {
+                for k in 0..3 {
+                    let (a, b) = (tri[k], tri[(k + 1) % 3]);
+                    *count.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+                }
+            }
+            count
+                .into_iter()
+                .filter(|(_, n)| *n == 1)
+                .map(|((a, b), _)| (p.positions[a as usize], p.positions[b as usize]))
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    let off_seam = |p: glam::DVec3| {
+        outline
+            .iter()
+            .map(|&(a, b)| {
+                let ab = b - a;
+                let s = ((p - a).dot(ab) / ab.length_squared().max(f64::MIN_POSITIVE)).clamp(0.0, 1.0);
+                p.distance(a + ab * s)
+            })
+            .fold(f64::MAX, f64::min)
+    };
+    let shifted: Vec<(String, f64, f64)> = t
+        .nodes
+        .iter()
+        .filter_map(|n| {
+            let p = glam::DVec3::from_array(n.reference);
+            n.ring_shift.map(|s| (n.point.to_string(), s, off_seam(p)))
+        })
+        .collect();
+    for (point, shift, off) in &shifted {
+        eprintln!("{point}: shifted {:+.4} of its girth, {:.2} mm off the designed seams", shift, off * 1e3);
+    }
+    // the princess seams cross the bust, waist and hip lines on both sides, front and back, away
+    // from the girths' oblique points
+    assert!(shifted.len() >= 8, "{shifted:?}");
+    // every seam node on a girth line lies on the designed seams
+    let seam_nodes: std::collections::BTreeSet<u32> = t
+        .seams
+        .iter()
+        .flat_map(|s| s.edges.iter().flat_map(|&e| [t.edges[e as usize].start, t.edges[e as usize].end]))
+        .collect();
+    let girths = [CurveId::Bust, CurveId::Waist, CurveId::Hip];
+    let planes: Vec<_> = girths.iter().map(|&c| girth_plane(&body, c).unwrap()).collect();
+    let mut crossings = 0;
+    for &v in &seam_nodes {
+        let n = &t.nodes[v as usize];
+        let def = point_def(n.point);
+        let p = glam::DVec3::from_array(n.reference);
+        let on_girth = girths
+            .iter()
+            .zip(&planes)
+            .any(|(&c, plane)| (def.f1 == c || def.f2 == c) && plane.signed_distance(p).abs() < RING_PLANE_TOLERANCE_M);
+        if on_girth {
+            crossings += 1;
+            let off = off_seam(p);
+            assert!(off < 1.5e-3, "{}: {:.2} mm off the designed seams", n.point, off * 1e3);
+        }
+    }
+    assert!(crossings >= 12, "{crossings} seam nodes on the girth lines");
+    // decoding on the design body reproduces them
+    let m = decode(t, &body, Relocation::Eq1Frame).unwrap();
+    let moved = m
+        .positions
+        .iter()
+        .zip(&t.nodes)
+        .map(|(p, n)| p.distance(glam::DVec3::from_array(n.reference)))
+        .fold(0.0, f64::max);
+    assert!(moved < DECODE_TOLERANCE_M, "decode off by {moved} m");
+    // an unknown girth is refused, naming it
+    opts.ease_at = vec!["hips".into()];
+    match author_from_garment("princess-dress", &pieces, &body, &opts) {
+        Err(FromGarmentError::UnknownGirth { name, .. }) => assert_eq!(name, "hips"),
+        other => panic!("{:?}", other.map(|a| a.template.name)),
+    }
+}

@@ -433,6 +433,11 @@ fn a_template_is_authored_from_a_garment() {
         400,
         "options",
     );
+    refused(
+        &[("garment", Some("s.glb"), &skirt), ("name", None, b"x"), ("options", None, b"{\"ease_at\": [\"hips\"]}")],
+        400,
+        "options.ease_at",
+    );
     refused(&[("garment", Some("s.glb"), b"glTF\x02\0\0\0"), ("name", None, b"x")], 400, "garment");
     // a tube that may not be cut cannot be laid flat
     refused(

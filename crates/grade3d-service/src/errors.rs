@@ -78,6 +78,9 @@ impl From<AuthorRequestError> for Problem {
                     Problem::unprocessable("garment-not-a-disc", detail).field("garment")
                 }
                 FromGarmentError::Option { .. } => Problem::bad_request("invalid-options", detail).field("options"),
+                FromGarmentError::UnknownGirth { .. } => {
+                    Problem::bad_request("invalid-options", detail).field("options.ease_at")
+                }
                 FromGarmentError::Body(_) => Problem::unprocessable("design-body", detail).field("body"),
                 FromGarmentError::Surface(_) => Problem::unprocessable("garment-surface", detail).field("garment"),
                 FromGarmentError::Simplify(_) => Problem::unprocessable("garment-contraction", detail).field("garment"),

@@ -188,7 +188,15 @@ pub fn encode(draft: &Draft, body: &FeatureBody) -> Result<Template, CodecError>
         let q = body.points.get(&tie).ok_or(CodecError::MissingPoint { node, point: tie })?;
         let d = p - q.position;
         let (alpha, beta, gamma) = q.frame.coordinates(d).ok_or(CodecError::SingularFrame { node, point: tie })?;
-        nodes.push(Node { point: tie, alpha, beta, gamma, offset: d.to_array(), reference: p.to_array() });
+        nodes.push(Node {
+            point: tie,
+            alpha,
+            beta,
+            gamma,
+            offset: d.to_array(),
+            reference: p.to_array(),
+            ring_shift: None,
+        });
     }
     // edge table: one row per undirected edge, start < end
     let mut edge_ids: BTreeMap<(u32, u32), u32> = BTreeMap::new();

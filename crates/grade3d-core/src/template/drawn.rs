@@ -51,6 +51,10 @@ use crate::geom::winding::{WindingOptions, WindingTree};
 
 const MM: f64 = 1e-3;
 
+/// The shortest shoulder seam, a fraction of the body's shoulder line
+/// ([`ShiftDressOptions::shoulder_fraction`]).
+const MIN_SHOULDER_FRACTION: f64 = 0.05;
+
 /// Bisections of [`Drawing::column_angle`] (count): the angle to 2⁻⁴⁰ of its bracket.
 const COLUMN_BISECTIONS: usize = 40;
 
@@ -167,6 +171,42 @@ fn arc(f: &dyn Fn(f64) -> DVec3, a0: f64, a1: f64, n: usize) -> Vec<[f64; 3]> {
 
 fn seg(p: DVec3, q: DVec3) -> Vec<[f64; 3]> {
     vec![p.to_array(), q.to_array()]
+}
+
+/// The curve through `points` (bottom to top) from `points[k]` to
+/// `points[k + 1]`, `n` points: the cubic Hermite segment whose end
+/// tangents run along the mean of the unit chords either side of each
+/// point (along the chord at the ends), scaled by the segment's chord
+/// `d_k = |P_{k+1} − P_k|`. Consecutive segments share their tangent's
+/// direction, so patches stacked on them meet without a crease (the
+/// Hermite-blended Coons patch's cross tangent at its bottom and top is the
+/// blend of its sides' tangents, [`crate::geom::coons`]).
+fn smooth_segment(points: &[DVec3], k: usize, n: usize) -> Vec<[f64; 3]> {
+    let m = points.len();
+    let chord = |i: usize| (points[i + 1] - points[i]).normalize_or_zero();
+    let tangent = |i: usize| {
+        if i == 0 {
+            chord(0)
+        } else if i == m - 1 {
+            chord(m - 2)
+        } else {
+            (chord(i - 1) + chord(i)).normalize_or_zero()
+        }
+    };
+    let (p0, p1) = (points[k], points[k + 1]);
+    let d = p0.distance(p1);
+    let (m0, m1) = (tangent(k) * d, tangent(k + 1) * d);
+    (0..n)
+        .map(|i| {
+            let t = i as f64 / (n - 1).max(1) as f64;
+            let (t2, t3) = (t * t, t * t * t);
+            let p = p0 * (2.0 * t3 - 3.0 * t2 + 1.0)
+                + m0 * (t3 - 2.0 * t2 + t)
+                + p1 * (-2.0 * t3 + 3.0 * t2)
+                + m1 * (t3 - t2);
+            p.to_array()
+        })
+        .collect()
 }
 
 /// The patch of `piece` between two rings: `lower` from angle `l.0` to
@@ -302,6 +342,10 @@ pub struct ShiftDressOptions {
     /// the design body, folds the back at the left underarm: issue #18's
     /// notes).
     pub waist_line: bool,
+    /// Cut each column as its own piece: princess seams from the side neck
+    /// points down over the bust to the hem, so that front and back are
+    /// each a centre piece between two side pieces. Default false.
+    pub princess_seams: bool,
     /// Hip ease, mm. Default 60.
     pub hip_ease_mm: f64,
     /// Hem below the hip line, m. Default 0.30.
@@ -315,6 +359,15 @@ pub struct ShiftDressOptions {
     pub clearance_mm: f64,
     /// Points on each drawn arc (count). Default 25.
     pub arc_points: usize,
+    /// The shoulder seam's length, a fraction of the body's shoulder line
+    /// from the side neck point: below 1 the armhole is cut in from the
+    /// shoulder point, as a sleeveless armhole is. Default 1.
+    pub shoulder_fraction: f64,
+    /// Draw the side seams and the column lines as smooth curves through
+    /// the girths' points, so that the bands between the girths meet
+    /// without a crease; false: straight between consecutive girths.
+    /// Default false.
+    pub smooth_columns: bool,
     /// Sampling of the curves' Coons patches.
     pub curves: CurvesOptions,
 }
@@ -327,12 +380,15 @@ impl Default for ShiftDressOptions {
             bust_ease_mm: 80.0,
             waist_ease_mm: 150.0,
             waist_line: true,
+            princess_seams: false,
             hip_ease_mm: 60.0,
             length_below_hip_m: 0.30,
             hem_flare_mm: 40.0,
             shoulder_lift_mm: 6.0,
             clearance_mm: 4.0,
             arc_points: 25,
+            shoulder_fraction: 1.0,
+            smooth_columns: false,
             curves: CurvesOptions { samples: 12, ..CurvesOptions::default() },
         }
     }
@@ -379,6 +435,17 @@ pub fn shift_dress_curves(body: &FeatureBody, o: &ShiftDressOptions) -> Result<V
     let neck_left = d.cast(&neck, nl);
     let neck_right = d.cast(&neck, nr);
     let (xl, xr) = (neck_left.dot(d.x_dir), neck_right.dot(d.x_dir));
+    // the columns' lateral positions on the front and the back: the side neck points', or with
+    // princess seams the bust's front- and back-oblique points' (the seams run over the bust)
+    let x_of = |id: PointId| d.point(id).map(|p| p.dot(d.x_dir));
+    let (front_x, back_x) = if o.princess_seams {
+        (
+            (x_of(PointId::BustFrontLeft)?, x_of(PointId::BustFrontRight)?),
+            (x_of(PointId::BustBackLeft)?, x_of(PointId::BustBackRight)?),
+        )
+    } else {
+        ((xl, xr), (xl, xr))
+    };
     // per ring: its five angles round the front (left side, left column, right column, right side) and
     // the back (right side, right column, left column, left side + 2π)
     struct Level<'r> {
@@ -392,8 +459,18 @@ pub fn shift_dress_curves(body: &FeatureBody, o: &ShiftDressOptions) -> Result<V
         .iter()
         .map(|(ring, (l, r))| Level {
             ring,
-            front: [*l, d.column_angle(ring, *l, PI / 2.0, xl), d.column_angle(ring, PI / 2.0, *r, xr), *r],
-            back: [*r, d.column_angle(ring, *r, 1.5 * PI, xr), d.column_angle(ring, 1.5 * PI, *l + TAU, xl), *l + TAU],
+            front: [
+                *l,
+                d.column_angle(ring, *l, PI / 2.0, front_x.0),
+                d.column_angle(ring, PI / 2.0, *r, front_x.1),
+                *r,
+            ],
+            back: [
+                *r,
+                d.column_angle(ring, *r, 1.5 * PI, back_x.1),
+                d.column_angle(ring, 1.5 * PI, *l + TAU, back_x.0),
+                *l + TAU,
+            ],
             hem: false,
         })
         .collect();
@@ -418,6 +495,19 @@ pub fn shift_dress_curves(body: &FeatureBody, o: &ShiftDressOptions) -> Result<V
             pts.reverse();
         }
         pts[0] = neck_end;
+        // cut at `shoulder_fraction` of its length from the neck
+        if o.shoulder_fraction < 1.0 {
+            let total: f64 = pts.windows(2).map(|w| w[0].distance(w[1])).sum();
+            let mut left = total * o.shoulder_fraction.max(MIN_SHOULDER_FRACTION);
+            let mut k = 1;
+            while k < pts.len() - 1 && pts[k - 1].distance(pts[k]) < left {
+                left -= pts[k - 1].distance(pts[k]);
+                k += 1;
+            }
+            let cut = pts[k - 1] + (pts[k] - pts[k - 1]).normalize_or_zero() * left.min(pts[k - 1].distance(pts[k]));
+            pts.truncate(k);
+            pts.push(cut);
+        }
         let end = pts[pts.len() - 1];
         Ok((pts.iter().map(|p| p.to_array()).collect(), end))
     };
@@ -464,6 +554,17 @@ pub fn shift_dress_curves(body: &FeatureBody, o: &ShiftDressOptions) -> Result<V
     let mut panels = Vec::new();
     for (piece, angles) in [("front", chest.front), ("back", chest.back)] {
         let front = piece == "front";
+        // the piece each column belongs to: the whole front (back), or with princess seams its
+        // body-left, centre and body-right pieces (the back's columns run from the body's right)
+        let column_piece = |k: usize| -> String {
+            if !o.princess_seams || k == 1 {
+                piece.to_owned()
+            } else if (k == 0) == front {
+                format!("{piece}-left")
+            } else {
+                format!("{piece}-right")
+            }
+        };
         // the chest line's four column points, and the top of each column line
         let c: Vec<DVec3> = angles.iter().map(|&a| at(chest, a)).collect();
         let (side0, side1) = if front { (shoulder_l, shoulder_r) } else { (shoulder_r, shoulder_l) };
@@ -473,6 +574,24 @@ pub fn shift_dress_curves(body: &FeatureBody, o: &ShiftDressOptions) -> Result<V
             (armhole(CurveId::ArmscyeLeft, true, c[0], side0)?, armhole(CurveId::ArmscyeRight, true, c[3], side1)?)
         } else {
             (armhole(CurveId::ArmscyeRight, false, c[0], side0)?, armhole(CurveId::ArmscyeLeft, false, c[3], side1)?)
+        };
+        // each column line's points from the hem up to the chest (and on to the neck for the
+        // middle columns' lines)
+        let column_line = |j: usize| -> Vec<DVec3> {
+            let mut pts: Vec<DVec3> =
+                levels.iter().rev().map(|lv| at(lv, if front { lv.front[j] } else { lv.back[j] })).collect();
+            if o.smooth_columns && (j == 1 || j == 2) {
+                pts.push(if j == 1 { n0 } else { n1 });
+            }
+            pts
+        };
+        let lines: Vec<Vec<DVec3>> = (0..4).map(column_line).collect();
+        let neck_column = |j: usize, top: DVec3| {
+            if o.smooth_columns {
+                smooth_segment(&lines[j], levels.len() - 1, n)
+            } else {
+                seg(c[j], top)
+            }
         };
         let neck_arc = {
             let (a0, a1) = if front { (nl, nr) } else { (nr, nl + TAU) };
@@ -486,33 +605,47 @@ pub fn shift_dress_curves(body: &FeatureBody, o: &ShiftDressOptions) -> Result<V
             bottom: chest_arc(0),
             top: rev(seam0),
             left: arm0,
-            right: seg(c[1], n0),
-            piece: Some(piece.to_owned()),
+            right: neck_column(1, n0),
+            piece: Some(column_piece(0)),
         });
         panels.push(CurvePanel {
             name: format!("{piece}-neck"),
             bottom: chest_arc(1),
             top: neck_arc,
-            left: seg(c[1], n0),
-            right: seg(c[2], n1),
-            piece: Some(piece.to_owned()),
+            left: neck_column(1, n0),
+            right: neck_column(2, n1),
+            piece: Some(column_piece(1)),
         });
         panels.push(CurvePanel {
             name: format!("{piece}-shoulder-{}", if front { "right" } else { "left" }),
             bottom: chest_arc(2),
             top: seam1.clone(),
-            left: seg(c[2], n1),
+            left: neck_column(2, n1),
             right: arm1,
-            piece: Some(piece.to_owned()),
+            piece: Some(column_piece(2)),
         });
         // the bands below the chest, three columns each
-        for w in levels.windows(2) {
+        let last_level = levels.len() - 1;
+        for (i, w) in levels.windows(2).enumerate() {
             let (upper, lower) = (&w[0], &w[1]);
             let (ua, la) = if front { (upper.front, lower.front) } else { (upper.back, lower.back) };
+            // the segment of a column line from this band's lower level up to its upper one
+            let side = |j: usize| {
+                let k = last_level - 1 - i;
+                if o.smooth_columns {
+                    smooth_segment(&lines[j], k, n)
+                } else {
+                    seg(lines[j][k], lines[j][k + 1])
+                }
+            };
             for k in 0..3 {
                 let name = format!("{piece}-{}-{k}", panels.len());
                 let (on_lower, on_upper) = (|a| at(lower, a), |a| at(upper, a));
-                panels.push(band(name, piece, (&on_lower, (la[k], la[k + 1])), (&on_upper, (ua[k], ua[k + 1])), n));
+                let mut p =
+                    band(name, &column_piece(k), (&on_lower, (la[k], la[k + 1])), (&on_upper, (ua[k], ua[k + 1])), n);
+                p.left = side(k);
+                p.right = side(k + 1);
+                panels.push(p);
             }
         }
     }
@@ -572,7 +705,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_shift_without_its_waist_line_has_one_band_fewer_in_each_column() {
+    fn a_shift_is_drawn_in_bands_and_columns() {
         let body = super::super::library::reference_body().expect("the reference body");
         let with = shift_dress_curves(&body, &ShiftDressOptions::default()).expect("drawn");
         let without =
@@ -580,9 +713,24 @@ mod tests {
         // front and back: 3 shoulder-band patches, then 3 columns a band (chest–bust, bust–waist,
         // waist–hip, hip–hem; without the waist line bust–hip)
         assert_eq!((with.len(), without.len()), (2 * (3 + 3 * 4), 2 * (3 + 3 * 3)));
+        // with princess seams and smooth column lines: the same patches, each column its own
+        // piece (a centre and two sides, front and back), its side curves smooth through the
+        // girths (one point an arc, not a chord)
+        let princess = shift_dress_curves(
+            &body,
+            &ShiftDressOptions { princess_seams: true, smooth_columns: true, ..Default::default() },
+        )
+        .expect("drawn");
+        assert_eq!(princess.len(), with.len());
+        let pieces: std::collections::BTreeSet<&str> = princess.iter().filter_map(|p| p.piece.as_deref()).collect();
+        assert_eq!(
+            pieces.into_iter().collect::<Vec<_>>(),
+            ["back", "back-left", "back-right", "front", "front-left", "front-right"]
+        );
+        assert!(princess.iter().skip(3).take(3).all(|p| p.left.len() == 25 && p.right.len() == 25));
         // every patch's sides meet at its corners (to rounding)
         let apart = |a: [f64; 3], b: [f64; 3]| DVec3::from_array(a).distance(DVec3::from_array(b));
-        for p in with.iter().chain(&without) {
+        for p in with.iter().chain(&without).chain(&princess) {
             assert!(apart(p.bottom[0], p.left[0]) < 1e-12, "{}", p.name);
             assert!(apart(p.top[0], p.left[p.left.len() - 1]) < 1e-12, "{}", p.name);
             assert!(apart(p.bottom[p.bottom.len() - 1], p.right[0]) < 1e-12, "{}", p.name);

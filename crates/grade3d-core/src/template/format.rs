@@ -52,6 +52,17 @@ pub struct Node {
     pub offset: [f64; 3],
     /// Position on the reference body, m.
     pub reference: [f64; 3],
+    /// For a ring node ([`super::girth`]): where it sits along its girth
+    /// from its feature point, as a signed fraction `σ` of the bridged
+    /// girth's length `L` (in the girth's walking direction): decoding
+    /// places it at arc parameter `s(q_j) + σ·L` of the eased girth, so it
+    /// grades in proportion to the girth. A seam that crosses the girth a
+    /// little way from a feature point takes that point's ring node
+    /// (issue #18: a princess seam 20 mm from the bust's oblique point);
+    /// at the point itself the seam's crossing jumped along the ring, and
+    /// the seam kinked there. Absent: 0, the node at its point.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ring_shift: Option<f64>,
 }
 
 /// A row of the edge table.
@@ -854,6 +865,7 @@ mod tests {
             gamma: 0.0,
             offset: [0.0; 3],
             reference: r,
+            ring_shift: None,
         };
         Template {
             schema: SCHEMA_ID.into(),

@@ -23,7 +23,8 @@
 //! ```
 //!
 //! with `s_a`, `s_b` the arc parameters of the two nodes' feature points on
-//! the new girth `ĉ`, `Δs` the forward arc between them, `n` the profile's
+//! the new girth `ĉ` (each shifted by its node's `ring_shift`, a fraction of
+//! the girth's length: [`ring_param`]), `Δs` the forward arc between them, `n` the profile's
 //! point count and `p_a`, `p_b` the nodes as decoded. On the reference body
 //! this reproduces the authored profiles, so encode → decode stays exact.
 //!
@@ -509,12 +510,12 @@ fn ring_order(
     }
     let mut order = Vec::with_capacity(walk.len());
     for &n in &walk {
-        let q = if Some(n) == ring.through {
-            positions.get(n as usize)?
+        let s = if Some(n) == ring.through {
+            loop_.closest(*positions.get(n as usize)?)?.s
         } else {
-            &body.points.get(&t.nodes[n as usize].point)?.position
+            ring_param(t, body, n, loop_)?
         };
-        order.push((n, loop_.closest(*q)?.s));
+        order.push((n, s));
     }
     Some(RingOrder { order, edges, through: ring.through })
 }
@@ -565,18 +566,34 @@ pub fn ring_nodes(t: &Template, body: &FeatureBody, positions: &[DVec3], curve: 
         .collect()
 }
 
-/// Places every ring node on the body's eased girth at its feature point,
-/// `ĉ(s_j) + r·û`, as authoring placed it on the reference body (where Eq. (1)
-/// gives the same point): Eq. (1)'s fixed offset along a frame that tilts
+/// A ring node's arc parameter on the bridged girth `loop_`: its feature
+/// point's, `s(q_j)`, shifted by its [`super::format::Node::ring_shift`]
+/// `σ`: `s(q_j) + σ·L` modulo `L`, the loop's length. `None` where the body
+/// lacks the point or the loop is degenerate.
+pub fn ring_param(t: &Template, body: &FeatureBody, node: u32, loop_: &Polyline) -> Option<f64> {
+    let n = t.nodes.get(node as usize)?;
+    let s = loop_.closest(body.points.get(&n.point)?.position)?.s;
+    match n.ring_shift {
+        Some(shift) if shift != 0.0 => {
+            let total = loop_.length();
+            (total > 0.0).then(|| (s + shift * total).rem_euclid(total))
+        }
+        _ => Some(s),
+    }
+}
+
+/// Places every ring node on the body's eased girth at its feature point
+/// (shifted along it by its `ring_shift`, [`ring_param`]), `ĉ(s_j) + r·û`,
+/// as authoring placed it on the reference body (where Eq. (1) gives the
+/// same point): Eq. (1)'s fixed offset along a frame that tilts
 /// with the body (a noisy scan, a full bust) would carry the node off the
 /// girth's plane and its ease. Returns how many nodes moved.
 pub fn place_ring_nodes(t: &Template, body: &FeatureBody, positions: &mut [DVec3]) -> usize {
     let mut moved = 0;
     for g in eased_girths(t, body, positions) {
         for node in ring_nodes(t, body, positions, g.curve, &[]) {
-            let Some(q) = body.points.get(&t.nodes[node as usize].point) else { continue };
-            let Some(at) = g.loop_.closest(q.position) else { continue };
-            positions[node as usize] = eased(&g.loop_, at.s, g.radial, &g.plane);
+            let Some(s) = ring_param(t, body, node, &g.loop_) else { continue };
+            positions[node as usize] = eased(&g.loop_, s, g.radial, &g.plane);
             moved += 1;
         }
     }
@@ -632,10 +649,7 @@ pub fn refit_rings(
             let hung_arc = hung.contains(&e.start) || hung.contains(&e.end);
             let Some(old) = profiles.get(edge as usize).and_then(|p| p.as_ref()) else { continue };
             let n = old.points().len();
-            let param = |node: u32| -> Option<f64> {
-                let q = body.points.get(&t.nodes[node as usize].point)?.position;
-                Some(loop_.closest(q)?.s)
-            };
+            let param = |node: u32| ring_param(t, body, node, loop_);
             let (Some(sa), Some(sb)) = (param(e.start), param(e.end)) else { continue };
             // the ring runs the shorter way round between neighbouring nodes
             let ends = (Some(positions[e.start as usize]), Some(positions[e.end as usize]));
