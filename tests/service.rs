@@ -347,6 +347,22 @@ fn template_library_over_http() {
     assert_eq!(r.status, 204);
     call("DELETE", &s.url("/v1/templates/mini-skirt"), &[(a, &k)], None).problem(404, Some("name"));
     call("GET", &s.url("/v1/templates/mini-skirt"), &[], None).problem(404, None);
+
+    // a template tied to an arm point (vocabulary 3: a sleeve's) on a body whose landmarks
+    // (vocabulary 2) give no arms: refused, naming the point the body lacks
+    let mut sleeve = skirt.json();
+    sleeve["name"] = "arm-probe".into();
+    sleeve["nodes"][0]["point"] = "upper_arm_left".into();
+    let r = call("POST", &s.url("/v1/templates"), &[json_ct(), (a, &k)], Some(sleeve.to_string().as_bytes()));
+    assert_eq!(r.status, 201, "{}", r.text());
+    let glb = fixture("bodies/male-average-asian.glb");
+    let lm = fixture("bodies/male-average-asian.landmarks.json");
+    let (ct, form) =
+        multipart(&[("scan", Some("b.glb"), &glb), ("landmarks", None, &lm), ("template", None, b"arm-probe")]);
+    let r = call("POST", &s.url("/v1/grade/scan"), &[("Content-Type", &ct)], Some(&form));
+    assert_eq!(r.status, 422, "{}", r.text());
+    let detail = r.json()["detail"].as_str().unwrap_or_default().to_owned();
+    assert!(detail.contains("upper_arm_left") && detail.contains("arm landmarks"), "{detail}");
 }
 
 /// A sketch edit of template `name` (its document `t`) on its design body:

@@ -49,7 +49,7 @@ use crate::geom::polyline::Polyline;
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum CodecError {
     /// The body has no such feature point.
-    #[error("node {node} is tied to `{point}`, which the body does not have")]
+    #[error("node {node} is tied to `{point}`, which the body does not have{}", missing_hint(*point))]
     MissingPoint {
         /// The node.
         node: u32,
@@ -78,6 +78,16 @@ pub enum CodecError {
     /// The encoded template is invalid.
     #[error(transparent)]
     Template(#[from] TemplateError),
+}
+
+/// What a body that lacks `point` needs: an optional (arm) point is derived
+/// only where its landmarks are given ([`crate::body::vocab::optional_point`]).
+fn missing_hint(point: PointId) -> &'static str {
+    if crate::body::vocab::optional_point(point) {
+        " (an arm point: give the body's arm landmarks, vocabulary 3, or send the scan without landmarks to have them found)"
+    } else {
+        ""
+    }
 }
 
 /// A pattern piece of a draft: triangle indices into [`Draft::triangles`].
