@@ -140,6 +140,28 @@ fn main() {
             let _ = SURFACE_OF.set(a.surface.clone());
             a.template
         }
+        Ok(name) if name == "live:sleeves" => {
+            // the short sleeves drawn here with `DOPTS` (JSON SleeveOptions)
+            design = grade3d::template::library::reference_body().unwrap();
+            let d: grade3d::template::drawn::SleeveOptions =
+                std::env::var("DOPTS").map(|j| serde_json::from_str(&j).unwrap()).unwrap_or_default();
+            let pieces = grade3d::template::drawn::sleeves_surface(&design, &d).unwrap();
+            if let Ok(path) = std::env::var("SURFACE") {
+                std::fs::write(path, grade3d::io::obj::write_obj_panels(&pieces, "live sleeves")).unwrap();
+            }
+            flat_report(&pieces);
+            let a =
+                author_from_garment("sleeves", &pieces, &design, &grade3d::template::drawn::garment_options()).unwrap();
+            println!("sleeves: {} nodes, tied to {:?}", a.template.nodes.len(), {
+                let mut ties: Vec<String> = a.template.nodes.iter().map(|n| n.point.to_string()).collect();
+                ties.sort();
+                ties.dedup();
+                ties
+            });
+            println!("unmapped {:?}", a.unmapped);
+            let _ = SURFACE_OF.set(a.surface.clone());
+            a.template
+        }
         Ok(name) if name.starts_with("drawn:") => {
             // a drawn style authored here: `GOPTS` (JSON) overrides the authoring options
             design = grade3d::template::library::reference_body().unwrap();

@@ -734,3 +734,48 @@ fn a_seam_crossing_a_girth_line_away_from_its_points_stays_on_the_seam() {
         other => panic!("{:?}", other.map(|a| a.template.name)),
     }
 }
+
+/// Issue #18, item 5 (the T-shirt's sleeves, first part): short set-in
+/// sleeves drawn on the arm curves (route 2, `drawn::sleeve_curves`: a tube
+/// on each arm from the eased armscye to the eased upper-arm girth, front
+/// and back pieces) and authored from their surface (route 1). Planted:
+/// four pieces, two mirror pairs; the nodes on the arm are tied to the
+/// arm's points (`upper_arm_*`), so the round trip onto the design body
+/// meets the bars (2 mm mean, 6 mm p95, both ways); and on a body whose
+/// landmarks (vocabulary 2) give no arms the template is refused, naming
+/// the arm point it lacks.
+#[test]
+fn sleeves_drawn_on_the_arms_round_trip_and_need_arms() {
+    use grade3d::template::drawn::{garment_options, sleeves_surface, SleeveOptions};
+    let body = grade3d::template::library::reference_body().unwrap();
+    let pieces = sleeves_surface(&body, &SleeveOptions::default()).unwrap();
+    let names: Vec<&str> = pieces.iter().map(|p| p.name.as_str()).collect();
+    assert_eq!(names, ["sleeve-left-front", "sleeve-left-back", "sleeve-right-front", "sleeve-right-back"]);
+    let a = author_from_garment("sleeves", &pieces, &body, &garment_options()).unwrap();
+    let t = &a.template;
+    for side in ["left", "right"] {
+        let pair = [format!("sleeve-{side}-front"), format!("sleeve-{side}-back")];
+        assert!(t.seams.iter().filter(|s| [&s.panel_a, &s.panel_b] == [&pair[0], &pair[1]]).count() >= 2, "{side}");
+        assert!(t.nodes.iter().any(|n| n.point.to_string() == format!("upper_arm_{side}")), "{side}");
+    }
+    assert!(
+        t.mirror_pairs.contains(&["sleeve-left-front".into(), "sleeve-right-front".into()]),
+        "{:?}",
+        t.mirror_pairs
+    );
+    let design = obstacle(&body.mesh);
+    let (to_design, to_graded, g) = round_trip("sleeves", &a, &body, &design);
+    for r in &g.pattern.reports {
+        eprintln!("sleeves {} on its design body: p95 strain {:.2} %", r.name, r.distortion.strain_p95 * 100.0);
+    }
+    for (mean, p95) in [to_design, to_graded] {
+        assert!(mean <= ROUND_TRIP_MEAN_MM && p95 <= ROUND_TRIP_P95_MM, "sleeves: {mean} {p95}");
+    }
+    // a fixture body's landmarks give no arms
+    let (name, mesh, lm) = fixture_bodies().into_iter().next().unwrap();
+    let fb = derive_features(mesh, &lm, &DeriveOptions::default()).unwrap();
+    match grade(t, &fb, None, &name, &GradeOptions::default()) {
+        Err(e) => assert!(e.to_string().contains("upper_arm_"), "{name}: {e}"),
+        Ok(_) => panic!("{name}: sleeves graded on a body without arms"),
+    }
+}

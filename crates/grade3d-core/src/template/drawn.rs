@@ -21,6 +21,9 @@
 //! * **Pieces** are several Coons patches joined where they share curves
 //!   (seed 001 §3.2's sub-patches, [`super::from_curves`] step 4): the
 //!   girths that shape a piece are lines within it, not seams.
+//! * **Sleeves** ([`sleeve_curves`]) are tubes between two eased loops in
+//!   their own planes (the armscye, the upper-arm girth), each split at its
+//!   lowest and highest points into a front and a back half.
 //! * **Held off the body** ([`hold_off`]): where a patch's interpolation
 //!   between its curves passes closer to the body than a clearance (a
 //!   shift dress's upper chest, between the chest line and the neckline),
@@ -700,6 +703,110 @@ pub fn shift_dress(body: &FeatureBody, o: &ShiftDressOptions) -> Result<Template
     Ok(t)
 }
 
+/// Knobs of the short set-in sleeves ([`sleeve_curves`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct SleeveOptions {
+    /// Ease of the armhole over the body's armscye, mm. Default 30.
+    pub armhole_ease_mm: f64,
+    /// Ease of the sleeve's hem over the upper-arm girth, mm. Default 60.
+    pub hem_ease_mm: f64,
+    /// The least distance of the surface from the body ([`hold_off`]), mm.
+    /// Default 4.
+    pub clearance_mm: f64,
+    /// Points on each drawn arc (count). Default 25.
+    pub arc_points: usize,
+    /// Sampling of the curves' Coons patches.
+    pub curves: CurvesOptions,
+}
+
+impl Default for SleeveOptions {
+    fn default() -> Self {
+        Self {
+            armhole_ease_mm: 30.0,
+            hem_ease_mm: 60.0,
+            clearance_mm: 4.0,
+            arc_points: 25,
+            curves: CurvesOptions { samples: 12, ..CurvesOptions::default() },
+        }
+    }
+}
+
+/// Samples (count) of an eased loop searched for its lowest and highest points.
+const LOOP_SEARCH_SAMPLES: usize = 512;
+
+/// The two halves of the closed body curve `curve` eased by `ease_mm` within
+/// its plane ([`girth::ring_radial`]), each from the eased loop's lowest
+/// point to its highest: the half that runs in front first.
+fn loop_halves(d: &Drawing, curve: CurveId, ease_mm: f64, n: usize) -> Result<[Vec<[f64; 3]>; 2], AuthorError> {
+    let c = d.body.curves.get(&curve).ok_or_else(|| missing(curve.as_str()))?;
+    let plane = girth::girth_plane(d.body, curve).ok_or_else(|| missing(curve.as_str()))?;
+    let loop_ = girth::bridged(&c.polyline, &plane);
+    let total = loop_.length();
+    if total <= 0.0 || loop_.points.len() < 3 {
+        return Err(missing(curve.as_str()));
+    }
+    let r = girth::ring_radial(&loop_, &plane, ease_mm * MM);
+    let at = |s: f64| girth::eased(&loop_, s, r, &plane);
+    let s_of = |k: usize| total * k as f64 / LOOP_SEARCH_SAMPLES as f64;
+    let height = |k: usize| at(s_of(k)).dot(d.up);
+    let low = (0..LOOP_SEARCH_SAMPLES).min_by(|&a, &b| height(a).total_cmp(&height(b))).unwrap_or(0);
+    let high = (0..LOOP_SEARCH_SAMPLES).max_by(|&a, &b| height(a).total_cmp(&height(b))).unwrap_or(0);
+    let (s0, forward) = (s_of(low), (s_of(high) - s_of(low)).rem_euclid(total));
+    let one = girth::eased_arc(&loop_, &plane, s0, forward, n, r, (None, None));
+    let other = girth::eased_arc(&loop_, &plane, s0, forward - total, n, r, (None, None));
+    let depth = |w: &[DVec3]| w.iter().map(|p| p.dot(d.z_dir)).sum::<f64>() / w.len().max(1) as f64;
+    let arr = |w: Vec<DVec3>| w.into_iter().map(|p| p.to_array()).collect::<Vec<_>>();
+    Ok(if depth(&one) >= depth(&other) { [arr(one), arr(other)] } else { [arr(other), arr(one)] })
+}
+
+/// Short set-in sleeves drawn as curves: on each arm a tube from the
+/// armscye, eased by `armhole_ease_mm` within its plane, to the upper-arm
+/// girth eased by `hem_ease_mm`, in two pieces (`sleeve-left-front`,
+/// `sleeve-left-back`, and the right's): each the Coons patch between the
+/// two loops' front (back) halves, from their lowest points (the underarm
+/// seam) to their highest (the seam over the top of the arm).
+///
+/// # Errors
+/// [`AuthorError::Missing`]: an armscye or upper-arm girth the body lacks
+/// (a body whose landmarks give no arms).
+pub fn sleeve_curves(body: &FeatureBody, o: &SleeveOptions) -> Result<Vec<CurvePanel>, AuthorError> {
+    let d = Drawing::new(body)?;
+    let n = o.arc_points.max(2);
+    let mut panels = Vec::new();
+    for (side, armscye, upper) in [
+        ("left", CurveId::ArmscyeLeft, CurveId::UpperArmLeft),
+        ("right", CurveId::ArmscyeRight, CurveId::UpperArmRight),
+    ] {
+        let top = loop_halves(&d, armscye, o.armhole_ease_mm, n)?;
+        let hem = loop_halves(&d, upper, o.hem_ease_mm, n)?;
+        for (k, half) in ["front", "back"].into_iter().enumerate() {
+            let (b, t) = (&hem[k], &top[k]);
+            let (b0, b1, t0, t1) = (b[0], b[b.len() - 1], t[0], t[t.len() - 1]);
+            panels.push(CurvePanel {
+                name: format!("sleeve-{side}-{half}"),
+                bottom: b.clone(),
+                top: t.clone(),
+                left: vec![b0, t0],
+                right: vec![b1, t1],
+                piece: None,
+            });
+        }
+    }
+    Ok(panels)
+}
+
+/// The sleeves' garment surface: [`sleeve_curves`] sampled, one mesh per
+/// piece, held off the body by `clearance_mm`.
+///
+/// # Errors
+/// [`sleeve_curves`]'s; [`AuthorError::Curves`].
+pub fn sleeves_surface(body: &FeatureBody, o: &SleeveOptions) -> Result<Vec<PanelMesh>, AuthorError> {
+    let mut pieces = panels_from_curves(&sleeve_curves(body, o)?, &o.curves)?;
+    hold_off(&mut pieces, body, o.clearance_mm * MM);
+    Ok(pieces)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -734,6 +841,28 @@ mod tests {
             assert!(apart(p.bottom[0], p.left[0]) < 1e-12, "{}", p.name);
             assert!(apart(p.top[0], p.left[p.left.len() - 1]) < 1e-12, "{}", p.name);
             assert!(apart(p.bottom[p.bottom.len() - 1], p.right[0]) < 1e-12, "{}", p.name);
+        }
+    }
+
+    #[test]
+    fn sleeves_are_two_patches_an_arm_from_the_underarm_to_the_top() {
+        let body = super::super::library::reference_body().expect("the reference body");
+        let o = SleeveOptions::default();
+        let p = sleeve_curves(&body, &o).expect("drawn");
+        let names: Vec<&str> = p.iter().map(|c| c.name.as_str()).collect();
+        assert_eq!(names, ["sleeve-left-front", "sleeve-left-back", "sleeve-right-front", "sleeve-right-back"]);
+        let up = |q: [f64; 3]| DVec3::from_array(q).y;
+        for pair in p.chunks(2) {
+            let (front, back) = (&pair[0], &pair[1]);
+            // the two halves share their ends: the underarm seam and the seam over the arm
+            assert_eq!((front.left.clone(), front.right.clone()), (back.left.clone(), back.right.clone()));
+            // each arc runs from its loop's lowest point up to its highest, the front half in front
+            for c in [&front.top, &front.bottom] {
+                assert!(up(c[0]) < up(c[c.len() - 1]), "{}", front.name);
+                assert_eq!(c.len(), o.arc_points);
+            }
+            let depth = |c: &Vec<[f64; 3]>| c.iter().map(|q| q[2]).sum::<f64>() / c.len() as f64;
+            assert!(depth(&front.top) > depth(&back.top) && depth(&front.bottom) > depth(&back.bottom));
         }
     }
 }

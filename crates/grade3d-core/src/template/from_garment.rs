@@ -72,7 +72,8 @@
 //!    tied to its nearest feature point, except that a node within 1.5 ×
 //!    [`RING_PLANE_TOLERANCE_M`] of a girth's plane is never tied to that
 //!    girth's points (decoding would take it for a ring node, the pattern
-//!    draw a girth line through it). Eq. (1) carries a node by a fixed
+//!    draw a girth line through it), and only a node on an arm (beyond an
+//!    armscye: a sleeve's) is tied to an arm point. Eq. (1) carries a node by a fixed
 //!    offset in one point's frame; far from that point it swings with the
 //!    frame. So two kinds of node are placed relative to the body's girths
 //!    instead, covariantly and exactly on the design body:
@@ -939,12 +940,17 @@ pub fn author_from_garment(
     let girth_planes: BTreeMap<CurveId, Plane> =
         GIRTH_CURVES.iter().filter_map(|&c| Some((c, girth_plane(body, c)?))).collect();
     let ring_curves_used: BTreeSet<CurveId> = rings.iter().map(|r| r.curve).collect();
+    let arms = arm_regions(body, &ax);
+    let body_index = SphereIndex::new(&body.mesh);
     let mut ties = Vec::with_capacity(positions.len());
     for (i, &p) in positions.iter().enumerate() {
         ties.push(Some(match ring_tie.get(&(i as u32)) {
             Some(&t) => t,
-            None => free_tie(p, body, &girth_planes, &ring_curves_used)
-                .ok_or_else(|| FromGarmentError::Body("feature points".into()))?,
+            None => {
+                let arm = on_arm(body_index.closest_point(&body.mesh, p).point, &arms, ax.up);
+                free_tie(p, body, &girth_planes, &ring_curves_used, arm)
+                    .ok_or_else(|| FromGarmentError::Body("feature points".into()))?
+            }
         }));
     }
     for (pi, panel) in panels.iter().enumerate() {
@@ -1912,13 +1918,16 @@ fn mirror_pairs(soup: &Soup, names: &[String], ax: &Axes, tolerance: f64) -> Vec
 /// lofted 4.6 cm above the hip on the design body came within 3 cm on a
 /// short man, pop39, and the two landed on one point), nor a point of
 /// another girth when the node lies within 1.5 × that tolerance of its plane
-/// (the pattern would draw a girth line through it), nor an arm point (a
-/// body whose landmarks have no arms could not place the node).
+/// (the pattern would draw a girth line through it), nor an arm point
+/// unless the node is `arm` (on an arm, [`on_arm`]: a sleeve's; a body whose
+/// landmarks have no arms could not place a torso garment's node tied to
+/// one, and a sleeve tied to the shoulder swings with its frame).
 fn free_tie(
     p: DVec3,
     body: &FeatureBody,
     planes: &BTreeMap<CurveId, Plane>,
     rings: &BTreeSet<CurveId>,
+    arm: bool,
 ) -> Option<PointId> {
     let near_girth = |c: CurveId| {
         rings.contains(&c)
@@ -1928,11 +1937,34 @@ fn free_tie(
         .iter()
         .filter(|(id, _)| {
             let d = point_def(**id);
-            // not an arm point: a body without arm landmarks could not place the node
-            !near_girth(d.f1) && !near_girth(d.f2) && !optional_point(**id)
+            // an arm point only for a node on an arm (a sleeve's): a body without arm
+            // landmarks could not place a torso garment's node tied to one
+            !near_girth(d.f1) && !near_girth(d.f2) && (arm || !optional_point(**id))
         })
         .min_by(|a, b| a.1.position.distance(p).total_cmp(&b.1.position.distance(p)))
         .map(|(id, _)| *id)
+}
+
+/// The body's arms: each armscye's plane turned away from the body's
+/// centre, and the height (along `up`) of the armscye's lowest point.
+fn arm_regions(body: &FeatureBody, ax: &Axes) -> Vec<(Plane, f64)> {
+    [CurveId::ArmscyeLeft, CurveId::ArmscyeRight]
+        .iter()
+        .filter_map(|&c| {
+            let plane = girth_plane(body, c)?;
+            let curve = &body.curves.get(&c)?.polyline;
+            let out = curve.centroid() - ax.centre;
+            let low = curve.points.iter().map(|q| q.dot(ax.up)).fold(f64::MAX, f64::min);
+            Some((if plane.normal.dot(out) >= 0.0 { plane } else { plane.flipped() }, low))
+        })
+        .collect()
+}
+
+/// Whether the body point `q` lies on an arm ([`arm_regions`]): beyond an
+/// armscye's plane, away from the body's centre, and above the armscye's
+/// lowest point (the plane, tilted, runs into the hips below it).
+fn on_arm(q: DVec3, arms: &[(Plane, f64)], up: DVec3) -> bool {
+    arms.iter().any(|(a, low)| a.signed_distance(q) > 0.0 && q.dot(up) >= *low)
 }
 
 /// Nodes over the torso between two of the body's torso girths, lofted
@@ -1963,18 +1995,7 @@ fn lofted(
         })
         .collect();
     girths.sort_by(|a, b| a.1.centroid.dot(ax.up).total_cmp(&b.1.centroid.dot(ax.up)));
-    // the arms: beyond an armscye's plane, away from the body's centre
-    // (and above the armscye's lowest point: the plane, tilted, runs into the hips below it)
-    let arms: Vec<(Plane, f64)> = [CurveId::ArmscyeLeft, CurveId::ArmscyeRight]
-        .iter()
-        .filter_map(|&c| {
-            let plane = girth_plane(body, c)?;
-            let curve = &body.curves.get(&c)?.polyline;
-            let out = curve.centroid() - ax.centre;
-            let low = curve.points.iter().map(|q| q.dot(ax.up)).fold(f64::MAX, f64::min);
-            Some((if plane.normal.dot(out) >= 0.0 { plane } else { plane.flipped() }, low))
-        })
-        .collect();
+    let arms = arm_regions(body, ax);
     let index = SphereIndex::new(&body.mesh);
     let mut out = Vec::new();
     for (i, &p) in positions.iter().enumerate() {
@@ -1990,7 +2011,7 @@ fn lofted(
             continue;
         };
         let q = index.closest_point(&body.mesh, p).point;
-        if arms.iter().any(|(a, low)| a.signed_distance(q) > 0.0 && q.dot(ax.up) >= *low) {
+        if on_arm(q, &arms, ax.up) {
             continue;
         }
         let (lower, upper) = (&girths[k], &girths[k + 1]);
