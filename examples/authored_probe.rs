@@ -72,13 +72,7 @@ fn main() {
         Ok(name) if name == "live:shift-dress" => {
             // the dress drawn here with `DOPTS` (JSON ShiftDressOptions); `SURFACE=path` writes its OBJ
             design = grade3d::template::library::reference_body().unwrap();
-            let d: grade3d::template::drawn::ShiftDressOptions =
-                std::env::var("DOPTS").map(|j| serde_json::from_str(&j).unwrap()).unwrap_or_default();
-            let pieces = grade3d::template::drawn::shift_dress_surface(&design, &d).unwrap();
-            if let Ok(path) = std::env::var("SURFACE") {
-                std::fs::write(path, grade3d::io::obj::write_obj_panels(&pieces, "live dress")).unwrap();
-            }
-            flat_report(&pieces);
+            let pieces = live_pieces(&design, grade3d::template::drawn::shift_dress_surface);
             if std::env::var("FLAT_ONLY").is_ok() {
                 return;
             }
@@ -143,13 +137,7 @@ fn main() {
         Ok(name) if name == "live:sleeves" => {
             // the short sleeves drawn here with `DOPTS` (JSON SleeveOptions)
             design = grade3d::template::library::reference_body().unwrap();
-            let d: grade3d::template::drawn::SleeveOptions =
-                std::env::var("DOPTS").map(|j| serde_json::from_str(&j).unwrap()).unwrap_or_default();
-            let pieces = grade3d::template::drawn::sleeves_surface(&design, &d).unwrap();
-            if let Ok(path) = std::env::var("SURFACE") {
-                std::fs::write(path, grade3d::io::obj::write_obj_panels(&pieces, "live sleeves")).unwrap();
-            }
-            flat_report(&pieces);
+            let pieces = live_pieces(&design, grade3d::template::drawn::sleeves_surface);
             let a =
                 author_from_garment("sleeves", &pieces, &design, &grade3d::template::drawn::garment_options()).unwrap();
             println!("sleeves: {} nodes, tied to {:?}", a.template.nodes.len(), {
@@ -452,4 +440,19 @@ fn flat_report(pieces: &[PanelMesh]) {
         line += &format!(" {}:{:.2}%", p.name, d.strain_p95 * 100.0);
     }
     println!("{line}");
+}
+
+/// A style drawn live on `body` with `DOPTS` (JSON options of `draw`), its
+/// OBJ written to `SURFACE` where given, and its pieces flattened as they are.
+fn live_pieces<O: serde::de::DeserializeOwned + Default, E: std::fmt::Debug>(
+    body: &FeatureBody,
+    draw: fn(&FeatureBody, &O) -> Result<Vec<PanelMesh>, E>,
+) -> Vec<PanelMesh> {
+    let o: O = std::env::var("DOPTS").map(|j| serde_json::from_str(&j).unwrap()).unwrap_or_default();
+    let pieces = draw(body, &o).unwrap();
+    if let Ok(path) = std::env::var("SURFACE") {
+        std::fs::write(path, grade3d::io::obj::write_obj_panels(&pieces, "live drawing")).unwrap();
+    }
+    flat_report(&pieces);
+    pieces
 }

@@ -102,13 +102,7 @@ fn authored_templates_are_valid_documents_that_decode_exactly() {
         let back = Template::from_json(&t.to_json()).unwrap();
         assert_eq!(&back, t, "{name}");
         // decoding on the design body reproduces the stored nodes
-        let m = decode(t, design_body(), Relocation::Eq1Frame).unwrap();
-        let worst = m
-            .positions
-            .iter()
-            .zip(&t.nodes)
-            .map(|(p, n)| p.distance(glam::DVec3::from_array(n.reference)))
-            .fold(0.0, f64::max);
+        let worst = decode_off(t, design_body());
         eprintln!(
             "{name}: {} nodes, {} faces, pieces {:?}, ease {:?}, {} seams, {} notches, mirror pairs {:?}, unmapped {:?}; decode on the design body off by {:.2e} m",
             t.nodes.len(),
@@ -137,6 +131,13 @@ fn authored_templates_are_valid_documents_that_decode_exactly() {
     }
     assert!(tights.template.mirror_pairs.contains(&["tights-front-left".into(), "tights-front-right".into()]));
     assert!(tights.template.mirror_pairs.contains(&["tights-back-left".into(), "tights-back-right".into()]));
+}
+
+/// How far decoding `t` on its design body `body` puts its farthest node
+/// from where the template stores it, m.
+fn decode_off(t: &Template, body: &grade3d::body::feature::FeatureBody) -> f64 {
+    let m = decode(t, body, Relocation::Eq1Frame).unwrap();
+    m.positions.iter().zip(&t.nodes).map(|(p, n)| p.distance(glam::DVec3::from_array(n.reference))).fold(0.0, f64::max)
 }
 
 /// The round trip of `a` (method in the module docs), printed under
@@ -719,13 +720,7 @@ fn a_seam_crossing_a_girth_line_away_from_its_points_stays_on_the_seam() {
     }
     assert!(crossings >= 12, "{crossings} seam nodes on the girth lines");
     // decoding on the design body reproduces them
-    let m = decode(t, &body, Relocation::Eq1Frame).unwrap();
-    let moved = m
-        .positions
-        .iter()
-        .zip(&t.nodes)
-        .map(|(p, n)| p.distance(glam::DVec3::from_array(n.reference)))
-        .fold(0.0, f64::max);
+    let moved = decode_off(t, &body);
     assert!(moved < DECODE_TOLERANCE_M, "decode off by {moved} m");
     // an unknown girth is refused, naming it
     opts.ease_at = vec!["hips".into()];
