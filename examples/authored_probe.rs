@@ -173,22 +173,8 @@ fn main() {
     }
     if let Ok(path) = std::env::var("COARSE") {
         // the template's coarse mesh on its design body
-        let mut obj = String::new();
-        for n in &t.nodes {
-            obj += &format!("v {} {} {}\n", n.reference[0], n.reference[1], n.reference[2]);
-        }
-        for f in &t.faces {
-            let e = |k: usize| {
-                let d = &t.edges[f.edges[k] as usize];
-                if f.directions[k] > 0 {
-                    d.start
-                } else {
-                    d.end
-                }
-            };
-            obj += &format!("f {} {} {}\n", e(0) + 1, e(1) + 1, e(2) + 1);
-        }
-        std::fs::write(path, obj).unwrap();
+        let positions = t.nodes.iter().map(|n| glam::DVec3::from_array(n.reference)).collect();
+        write_mesh(&path, "coarse", positions, (0..t.faces.len()).map(|f| t.face_nodes(f)).collect());
     }
     if std::env::var("NODES").is_ok() {
         let hip = girth_plane(&design, CurveId::Hip).unwrap();
@@ -337,15 +323,9 @@ fn print(body: &FeatureBody, name: &str, g: &Graded) {
     }
     if let Ok(dir) = std::env::var("GRADED") {
         // the graded surface, one OBJ a body
-        let mut obj = String::new();
-        for p in &g.mesh.positions {
-            obj += &format!("v {} {} {}\n", p.x, p.y, p.z);
-        }
-        obj += "g graded\n";
-        for t in &g.mesh.triangles {
-            obj += &format!("f {} {} {}\n", usize::from(t[0]) + 1, usize::from(t[1]) + 1, usize::from(t[2]) + 1);
-        }
-        std::fs::write(format!("{dir}/{}-graded.obj", name.replace('/', "-")), obj).unwrap();
+        let triangles = g.mesh.triangles.iter().map(|t| t.map(|v| usize::from(v) as u32)).collect();
+        let path = format!("{dir}/{}-graded.obj", name.replace('/', "-"));
+        write_mesh(&path, "graded", g.mesh.positions.iter().copied().collect(), triangles);
     }
     if let Ok(dir) = std::env::var("SVG") {
         let svg = grade3d::pattern::export::svg::pieces_svg(&g.pattern.pieces, &Default::default());
@@ -455,4 +435,10 @@ fn live_pieces<O: serde::de::DeserializeOwned + Default, E: std::fmt::Debug>(
     }
     flat_report(&pieces);
     pieces
+}
+
+/// One mesh written as an OBJ of one group (`write_obj_panels`).
+fn write_mesh(path: &str, name: &str, positions: Vec<glam::DVec3>, triangles: Vec<[u32; 3]>) {
+    let piece = PanelMesh { name: name.into(), positions, triangles, uv: Vec::new() };
+    std::fs::write(path, grade3d::io::obj::write_obj_panels(&[piece], name)).unwrap();
 }

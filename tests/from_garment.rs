@@ -640,6 +640,8 @@ fn a_pieces_grain_comes_from_its_pattern_layout() {
 #[test]
 fn a_seam_crossing_a_girth_line_away_from_its_points_stays_on_the_seam() {
     use grade3d::body::vocab::{point_def, CurveId};
+    use grade3d::geom::mesh::boundary_loops;
+    use grade3d::geom::polyline::Polyline;
     use grade3d::template::drawn::{self, ShiftDressOptions};
     use grade3d::template::from_garment::FromGarmentError;
     use grade3d::template::girth::{girth_plane, RING_PLANE_TOLERANCE_M};
@@ -654,33 +656,16 @@ fn a_seam_crossing_a_girth_line_away_from_its_points_stays_on_the_seam() {
     // only the girths named are girth lines
     assert_eq!(t.ease_mm.keys().collect::<Vec<_>>(), ["bust", "hip", "waist"], "{:?}", t.ease_mm);
     // the designed garment's seams: its pieces' outline edges
-    let outline: Vec<(glam::DVec3, glam::DVec3)> = pieces
+    let outline: Vec<Polyline> = pieces
         .iter()
         .flat_map(|p| {
-            let mut count = std::collections::BTreeMap::new();
-            for tri in &p.triangles {
-                for k in 0..3 {
-                    let (a, b) = (tri[k], tri[(k + 1) % 3]);
-                    *count.entry((a.min(b), a.max(b))).or_insert(0) += 1;
-                }
-            }
-            count
+            boundary_loops(&p.triangles)
                 .into_iter()
-                .filter(|(_, n)| *n == 1)
-                .map(|((a, b), _)| (p.positions[a as usize], p.positions[b as usize]))
-                .collect::<Vec<_>>()
+                .map(|l| Polyline::new(l.iter().map(|&v| p.positions[v as usize]).collect(), true))
         })
         .collect();
-    let off_seam = |p: glam::DVec3| {
-        outline
-            .iter()
-            .map(|&(a, b)| {
-                let ab = b - a;
-                let s = ((p - a).dot(ab) / ab.length_squared().max(f64::MIN_POSITIVE)).clamp(0.0, 1.0);
-                p.distance(a + ab * s)
-            })
-            .fold(f64::MAX, f64::min)
-    };
+    let off_seam =
+        |p: glam::DVec3| outline.iter().filter_map(|l| l.closest(p)).map(|c| c.distance).fold(f64::MAX, f64::min);
     let shifted: Vec<(String, f64, f64)> = t
         .nodes
         .iter()

@@ -355,14 +355,20 @@ fn template_library_over_http() {
     sleeve["nodes"][0]["point"] = "upper_arm_left".into();
     let r = call("POST", &s.url("/v1/templates"), &[json_ct(), (a, &k)], Some(sleeve.to_string().as_bytes()));
     assert_eq!(r.status, 201, "{}", r.text());
-    let glb = fixture("bodies/male-average-asian.glb");
-    let lm = fixture("bodies/male-average-asian.landmarks.json");
-    let (ct, form) =
-        multipart(&[("scan", Some("b.glb"), &glb), ("landmarks", None, &lm), ("template", None, b"arm-probe")]);
-    let r = call("POST", &s.url("/v1/grade/scan"), &[("Content-Type", &ct)], Some(&form));
+    let r = grade_landmarked_scan(&s, "arm-probe");
     assert_eq!(r.status, 422, "{}", r.text());
     let detail = r.json()["detail"].as_str().unwrap_or_default().to_owned();
     assert!(detail.contains("upper_arm_left") && detail.contains("arm landmarks"), "{detail}");
+}
+
+/// `POST /v1/grade/scan` of a fixture body (male-average-asian) with its
+/// landmarks (vocabulary 2: no arms) in `template`.
+fn grade_landmarked_scan(s: &Server, template: &str) -> Reply {
+    let glb = fixture("bodies/male-average-asian.glb");
+    let lm = fixture("bodies/male-average-asian.landmarks.json");
+    let (ct, form) =
+        multipart(&[("scan", Some("b.glb"), &glb), ("landmarks", None, &lm), ("template", None, template.as_bytes())]);
+    call("POST", &s.url("/v1/grade/scan"), &[("Content-Type", &ct)], Some(&form))
 }
 
 /// A sketch edit of template `name` (its document `t`) on its design body:
@@ -753,15 +759,12 @@ fn answers_validate_against_the_generated_schemas() {
     let mut broken = result.clone();
     broken["report"]["sizes"][0]["garments"][0]["pieces"][0]["converged"] = "yes".into();
     assert!(!errors("GradeResult", &broken).is_empty(), "a string for a boolean validated");
-    let glb = fixture("bodies/male-average-asian.glb");
-    let lm = fixture("bodies/male-average-asian.landmarks.json");
-    let (ct, body) =
-        multipart(&[("scan", Some("b.glb"), &glb), ("landmarks", None, &lm), ("template", None, b"fitted-bodice")]);
-    let r = call("POST", &s.url("/v1/grade/scan"), &[("Content-Type", &ct)], Some(&body));
+    let r = grade_landmarked_scan(&s, "fitted-bodice");
     assert_eq!(r.status, 200, "{}", r.text());
     validate("GradeResult", &r.json());
     validate("BodiesReport", &r.json()["report"]);
     // without landmarks: the report carries the registration (issue #17)
+    let glb = fixture("bodies/male-average-asian.glb");
     let (ct, body) = multipart(&[("scan", Some("b.glb"), &glb), ("template", None, b"straight-skirt")]);
     let r = call("POST", &s.url("/v1/grade/scan"), &[("Content-Type", &ct)], Some(&body));
     assert_eq!(r.status, 200, "{}", r.text());

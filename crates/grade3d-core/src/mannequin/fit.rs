@@ -216,13 +216,25 @@ pub struct FittedMannequin {
     pub scale_jacobian: Option<ScaleJacobian>,
 }
 
-/// The local modifiers that move a measurement: [`modifier_for`]'s, and for
-/// the arm length both MakeHuman's upper- and lower-arm lengths (an arm
-/// lengthened at the shoulder alone would move its elbow).
+/// The local modifiers that move a measurement: one for most, none for
+/// those no modifier moves, and for the arm length both MakeHuman's upper-
+/// and lower-arm lengths (an arm lengthened at the shoulder alone would
+/// move its elbow).
 pub fn modifiers_for(id: MeasurementId) -> &'static [&'static str] {
+    use MeasurementId as M;
     match id {
-        MeasurementId::ArmLength => &["arms/measure-upperarm-length", "arms/measure-lowerarm-length"],
-        MeasurementId::UpperArmGirth => &["arms/measure-upperarm-circ"],
+        M::NeckBaseGirth => &["neck/measure-neck-circ"],
+        M::BustGirth => &["torso/measure-bust-circ"],
+        M::UnderbustGirth => &["torso/measure-underbust-circ"],
+        M::WaistGirth => &["torso/measure-waist-circ"],
+        M::HipGirth => &["torso/measure-hips-circ"],
+        M::ShoulderGirth | M::ShoulderWidth => &["torso/measure-shoulder-dist"],
+        M::ChestGirth => &["torso/measure-frontchest-dist"],
+        M::ThighGirth => &["legs/measure-thigh-circ"],
+        M::KneeGirth => &["legs/measure-knee-circ"],
+        M::BackLength => &["torso/measure-napetowaist-dist"],
+        M::UpperArmGirth => &["arms/measure-upperarm-circ"],
+        M::ArmLength => &["arms/measure-upperarm-length", "arms/measure-lowerarm-length"],
         _ => &[],
     }
 }
@@ -230,23 +242,7 @@ pub fn modifiers_for(id: MeasurementId) -> &'static [&'static str] {
 /// The local modifier that moves a measurement, if any (the first of
 /// [`modifiers_for`]).
 pub fn modifier_for(id: MeasurementId) -> Option<&'static str> {
-    if let Some(first) = modifiers_for(id).first() {
-        return Some(first);
-    }
-    use MeasurementId as M;
-    Some(match id {
-        M::NeckBaseGirth => "neck/measure-neck-circ",
-        M::BustGirth => "torso/measure-bust-circ",
-        M::UnderbustGirth => "torso/measure-underbust-circ",
-        M::WaistGirth => "torso/measure-waist-circ",
-        M::HipGirth => "torso/measure-hips-circ",
-        M::ShoulderGirth | M::ShoulderWidth => "torso/measure-shoulder-dist",
-        M::ChestGirth => "torso/measure-frontchest-dist",
-        M::ThighGirth => "legs/measure-thigh-circ",
-        M::KneeGirth => "legs/measure-knee-circ",
-        M::BackLength => "torso/measure-napetowaist-dist",
-        _ => return None,
-    })
+    modifiers_for(id).first().copied()
 }
 
 /// Torso profiles phase 2 can scale.
@@ -368,8 +364,7 @@ pub fn fit_size(model: &BodyModel, row: &SizeRow, opts: &FitOptions) -> Result<F
     if row.targets.contains_key(&MeasurementId::Stature) {
         vars.push(Var::Height);
     }
-    let mods: BTreeSet<&'static str> =
-        ids.iter().flat_map(|&id| modifier_for(id).into_iter().chain(modifiers_for(id).iter().copied())).collect();
+    let mods: BTreeSet<&'static str> = ids.iter().flat_map(|&id| modifiers_for(id).iter().copied()).collect();
     let available = model.modifier_names();
     vars.extend(mods.into_iter().filter(|m| available.iter().any(|a| a == m)).map(Var::Modifier));
     let x0: Vec<f64> = vars

@@ -49,6 +49,7 @@ use super::girth;
 use super::library::AuthorError;
 use crate::body::feature::FeatureBody;
 use crate::body::vocab::{CurveId, PointId};
+use crate::geom::polyline::Polyline;
 use crate::geom::query::SphereIndex;
 use crate::geom::winding::{WindingOptions, WindingTree};
 
@@ -346,8 +347,9 @@ pub struct ShiftDressOptions {
     /// notes).
     pub waist_line: bool,
     /// Cut each column as its own piece: princess seams from the side neck
-    /// points down over the bust to the hem, so that front and back are
-    /// each a centre piece between two side pieces. Default false.
+    /// points down over the bust's front- (back-) oblique points to the
+    /// hem, so that front and back are each a centre piece between two
+    /// side pieces. Default false.
     pub princess_seams: bool,
     /// Hip ease, mm. Default 60.
     pub hip_ease_mm: f64,
@@ -500,16 +502,8 @@ pub fn shift_dress_curves(body: &FeatureBody, o: &ShiftDressOptions) -> Result<V
         pts[0] = neck_end;
         // cut at `shoulder_fraction` of its length from the neck
         if o.shoulder_fraction < 1.0 {
-            let total: f64 = pts.windows(2).map(|w| w[0].distance(w[1])).sum();
-            let mut left = total * o.shoulder_fraction.max(MIN_SHOULDER_FRACTION);
-            let mut k = 1;
-            while k < pts.len() - 1 && pts[k - 1].distance(pts[k]) < left {
-                left -= pts[k - 1].distance(pts[k]);
-                k += 1;
-            }
-            let cut = pts[k - 1] + (pts[k] - pts[k - 1]).normalize_or_zero() * left.min(pts[k - 1].distance(pts[k]));
-            pts.truncate(k);
-            pts.push(cut);
+            let line = Polyline::new(pts, false);
+            pts = line.arc(0.0, line.length() * o.shoulder_fraction.max(MIN_SHOULDER_FRACTION)).points;
         }
         let end = pts[pts.len() - 1];
         Ok((pts.iter().map(|p| p.to_array()).collect(), end))
@@ -732,9 +726,6 @@ impl Default for SleeveOptions {
     }
 }
 
-/// Samples (count) of an eased loop searched for its lowest and highest points.
-const LOOP_SEARCH_SAMPLES: usize = 512;
-
 /// The two halves of the closed body curve `curve` eased by `ease_mm` within
 /// its plane ([`girth::ring_radial`]), each from the eased loop's lowest
 /// point to its highest: the half that runs in front first.
@@ -747,14 +738,17 @@ fn loop_halves(d: &Drawing, curve: CurveId, ease_mm: f64, n: usize) -> Result<[V
         return Err(missing(curve.as_str()));
     }
     let r = girth::ring_radial(&loop_, &plane, ease_mm * MM);
-    let at = |s: f64| girth::eased(&loop_, s, r, &plane);
-    let s_of = |k: usize| total * k as f64 / LOOP_SEARCH_SAMPLES as f64;
-    let height = |k: usize| at(s_of(k)).dot(d.up);
-    let low = (0..LOOP_SEARCH_SAMPLES).min_by(|&a, &b| height(a).total_cmp(&height(b))).unwrap_or(0);
-    let high = (0..LOOP_SEARCH_SAMPLES).max_by(|&a, &b| height(a).total_cmp(&height(b))).unwrap_or(0);
-    let (s0, forward) = (s_of(low), (s_of(high) - s_of(low)).rem_euclid(total));
-    let one = girth::eased_arc(&loop_, &plane, s0, forward, n, r, (None, None));
-    let other = girth::eased_arc(&loop_, &plane, s0, forward - total, n, r, (None, None));
+    // the eased loop's lowest and highest vertices
+    let eased = girth::eased_vertices(&loop_, r, &plane);
+    let height = |k: &usize| eased[*k].dot(d.up);
+    let low = (0..eased.len()).min_by(|a, b| height(a).total_cmp(&height(b))).unwrap_or(0);
+    let high = (0..eased.len()).max_by(|a, b| height(a).total_cmp(&height(b))).unwrap_or(0);
+    let cum = loop_.cumulative();
+    let (s0, forward) = (cum[low], (cum[high] - cum[low]).rem_euclid(total));
+    // both halves end on the same two points, to the bit (the seams between them)
+    let ends = (Some(eased[low]), Some(eased[high]));
+    let one = girth::eased_arc(&loop_, &plane, s0, forward, n, r, ends);
+    let other = girth::eased_arc(&loop_, &plane, s0, forward - total, n, r, ends);
     let depth = |w: &[DVec3]| w.iter().map(|p| p.dot(d.z_dir)).sum::<f64>() / w.len().max(1) as f64;
     let arr = |w: Vec<DVec3>| w.into_iter().map(|p| p.to_array()).collect::<Vec<_>>();
     Ok(if depth(&one) >= depth(&other) { [arr(one), arr(other)] } else { [arr(other), arr(one)] })

@@ -73,10 +73,10 @@
 //!    [`RING_PLANE_TOLERANCE_M`] of a girth's plane is never tied to that
 //!    girth's points (decoding would take it for a ring node, the pattern
 //!    draw a girth line through it), and only a node on an arm (beyond an
-//!    armscye: a sleeve's) is tied to an arm point. Eq. (1) carries a node by a fixed
-//!    offset in one point's frame; far from that point it swings with the
-//!    frame. So two kinds of node are placed relative to the body's girths
-//!    instead, covariantly and exactly on the design body:
+//!    armscye: a sleeve's) is tied to an arm point. Eq. (1) carries a node
+//!    by a fixed offset in one point's frame; far from that point it swings
+//!    with the frame. So two kinds of node are placed relative to the
+//!    body's girths instead, covariantly and exactly on the design body:
 //!    * below the garment's lowest torso girth line, where the garment's
 //!      closed section through the node (or the nearest one above it: a
 //!      hem that dips at the centre front closes higher up) goes around
@@ -940,8 +940,8 @@ pub fn author_from_garment(
     let girth_planes: BTreeMap<CurveId, Plane> =
         GIRTH_CURVES.iter().filter_map(|&c| Some((c, girth_plane(body, c)?))).collect();
     let ring_curves_used: BTreeSet<CurveId> = rings.iter().map(|r| r.curve).collect();
-    let arms = arm_regions(body, &ax);
-    let body_index = SphereIndex::new(&body.mesh);
+    // the body's arms and a closest-point index of it, for the ties and the lofting
+    let (arms, body_index) = (arm_regions(body, &ax), SphereIndex::new(&body.mesh));
     let mut ties = Vec::with_capacity(positions.len());
     for (i, &p) in positions.iter().enumerate() {
         ties.push(Some(match ring_tie.get(&(i as u32)) {
@@ -971,7 +971,7 @@ pub fn author_from_garment(
     let ring_set: BTreeSet<u32> = ring_tie.keys().copied().collect();
     let below = hanging(&positions, &ring_set, &surface, body, &rings);
     let hung: BTreeSet<u32> = below.iter().map(|b| b.node).collect();
-    let between = lofted(&positions, &ring_set, &hung, body, &ax);
+    let between = lofted(&positions, &ring_set, &hung, body, &ax, (&arms, &body_index));
     let draft = Draft {
         name: name.to_owned(),
         version: 1,
@@ -1005,7 +1005,7 @@ pub fn author_from_garment(
     let mut first = encode(&draft, body)?;
     let crossings: BTreeSet<u32> =
         if opts.keep_crossings { ring_set.intersection(&seam_nodes).copied().collect() } else { BTreeSet::new() };
-    let shifts = ring_shifts(&first, body, &crossings);
+    let shifts = ring_shifts(&first, body, &rings, &crossings);
     for (&v, &shift) in &shifts {
         first.nodes[v as usize].ring_shift = Some(shift);
     }
@@ -1026,29 +1026,29 @@ pub fn author_from_garment(
 const RING_SHIFT_MIN_M: f64 = 1e-3;
 
 /// The [`super::format::Node::ring_shift`] of each of `nodes` (ring nodes
-/// where a seam crosses a girth line) whose place along its girth, in `t`
+/// where a seam crosses one of the girth lines `rings`) whose place along
+/// its girth, in `t`
 /// as encoded on the design body `body`, lies more than
 /// [`RING_SHIFT_MIN_M`] from its feature point's: the arc from the point's
 /// parameter on the bridged girth to the node's (the loop point in the
 /// node's direction from the loop's centroid, as decoding eases it
 /// outwards), the shorter way, over the loop's length.
-fn ring_shifts(t: &Template, body: &FeatureBody, nodes: &BTreeSet<u32>) -> BTreeMap<u32, f64> {
+fn ring_shifts(t: &Template, body: &FeatureBody, rings: &[RingLine], nodes: &BTreeSet<u32>) -> BTreeMap<u32, f64> {
     let mut out = BTreeMap::new();
     for &v in nodes {
         let n = &t.nodes[v as usize];
         let def = point_def(n.point);
         let p = DVec3::from_array(n.reference);
-        let Some((curve, plane)) =
-            [def.f1, def.f2].into_iter().filter_map(|c| Some((c, girth_plane(body, c)?))).find(|(c, plane)| {
-                ring_curves_all().contains(c) && plane.signed_distance(p).abs() <= RING_PLANE_TOLERANCE_M
-            })
-        else {
+        let Some(r) = rings.iter().find(|r| {
+            (r.curve == def.f1 || r.curve == def.f2) && r.plane.signed_distance(p).abs() <= RING_PLANE_TOLERANCE_M
+        }) else {
             continue;
         };
-        let (Some(c), Some(q)) = (body.curves.get(&curve), body.points.get(&n.point)) else { continue };
-        let loop_ = bridged(&c.polyline, &plane);
+        let (Some(c), Some(q)) = (body.curves.get(&r.curve), body.points.get(&n.point)) else { continue };
+        let loop_ = bridged(&c.polyline, &r.plane);
         let total = loop_.length();
-        let (Some(at_point), Some(at_node)) = (loop_.closest(q.position), loop_point_towards(&loop_, &plane, p)) else {
+        let (Some(at_point), Some(at_node)) = (loop_.closest(q.position), loop_point_towards(&loop_, &r.plane, p))
+        else {
             continue;
         };
         if total <= 0.0 {
@@ -1063,12 +1063,6 @@ fn ring_shifts(t: &Template, body: &FeatureBody, nodes: &BTreeSet<u32>) -> BTree
         }
     }
     out
-}
-
-/// Every body curve a template may declare ease at ([`ring_curves`] of
-/// every girth name).
-fn ring_curves_all() -> Vec<CurveId> {
-    RING_NAMES.iter().flat_map(|g| ring_curves(g).iter().copied()).collect()
 }
 
 /// The arc parameter of the point of the closed loop `loop_` (in `plane`)
@@ -1979,6 +1973,7 @@ fn lofted(
     hung: &BTreeSet<u32>,
     body: &FeatureBody,
     ax: &Axes,
+    (arms, index): (&[(Plane, f64)], &SphereIndex),
 ) -> Vec<Between> {
     // the torso girths with a walk and a start point (the one furthest front), bottom to top
     let mut girths: Vec<(CurveId, GirthWalk, PointId, f64)> = TORSO
@@ -1995,8 +1990,6 @@ fn lofted(
         })
         .collect();
     girths.sort_by(|a, b| a.1.centroid.dot(ax.up).total_cmp(&b.1.centroid.dot(ax.up)));
-    let arms = arm_regions(body, ax);
-    let index = SphereIndex::new(&body.mesh);
     let mut out = Vec::new();
     for (i, &p) in positions.iter().enumerate() {
         let node = i as u32;
@@ -2011,7 +2004,7 @@ fn lofted(
             continue;
         };
         let q = index.closest_point(&body.mesh, p).point;
-        if on_arm(q, &arms, ax.up) {
+        if on_arm(q, arms, ax.up) {
             continue;
         }
         let (lower, upper) = (&girths[k], &girths[k + 1]);

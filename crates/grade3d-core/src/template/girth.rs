@@ -24,8 +24,8 @@
 //!
 //! with `s_a`, `s_b` the arc parameters of the two nodes' feature points on
 //! the new girth `ĉ` (each shifted by its node's `ring_shift`, a fraction of
-//! the girth's length: [`ring_param`]), `Δs` the forward arc between them, `n` the profile's
-//! point count and `p_a`, `p_b` the nodes as decoded. On the reference body
+//! the girth's length: [`ring_param`]), `Δs` the forward arc between them,
+//! `n` the profile's point count and `p_a`, `p_b` the nodes as decoded. On the reference body
 //! this reproduces the authored profiles, so encode → decode stays exact.
 //!
 //! **Ring edges** of a girth `g` are the template edges with a profile whose
@@ -585,9 +585,9 @@ pub fn ring_param(t: &Template, body: &FeatureBody, node: u32, loop_: &Polyline)
 /// Places every ring node on the body's eased girth at its feature point
 /// (shifted along it by its `ring_shift`, [`ring_param`]), `ĉ(s_j) + r·û`,
 /// as authoring placed it on the reference body (where Eq. (1) gives the
-/// same point): Eq. (1)'s fixed offset along a frame that tilts
-/// with the body (a noisy scan, a full bust) would carry the node off the
-/// girth's plane and its ease. Returns how many nodes moved.
+/// same point): Eq. (1)'s fixed offset along a frame that tilts with the
+/// body (a noisy scan, a full bust) would carry the node off the girth's
+/// plane and its ease. Returns how many nodes moved.
 pub fn place_ring_nodes(t: &Template, body: &FeatureBody, positions: &mut [DVec3]) -> usize {
     let mut moved = 0;
     for g in eased_girths(t, body, positions) {
