@@ -236,11 +236,14 @@ fn main() {
     print(&design, "design", &g);
     let decide = std::env::var("DECIDE").is_ok();
     let mut bodies: Vec<(String, FeatureBody)> = Vec::new();
-    // the ASTM sizes matching the filter, and with `FIXTURES` the eight fixture bodies
-    let fixtures = std::env::var("FIXTURES").is_ok();
+    // the ASTM sizes matching the filter, and with `FIXTURES=1` the eight fixture bodies
+    // (`FIXTURES=older`: those whose name contains it)
+    let fixtures = std::env::var("FIXTURES").ok();
     for (name, mesh, lm) in common::fixture_bodies() {
         let astm = name.starts_with("astm/") && filter.as_ref().is_none_or(|f| name.contains(f.as_str()));
-        if astm || (fixtures && name.starts_with("bodies/")) {
+        let fixture =
+            name.starts_with("bodies/") && fixtures.as_ref().is_some_and(|f| f == "1" || name.contains(f.as_str()));
+        if astm || fixture {
             bodies.push((name, derive_features(mesh, &lm, &DeriveOptions::default()).unwrap()));
         }
     }
@@ -345,6 +348,16 @@ fn print(body: &FeatureBody, name: &str, g: &Graded) {
     }
     if g.collision.surface.pairs_after > 0 {
         line += &format!(" THROUGH:{}", g.collision.surface.pairs_after);
+    }
+    for pair in &g.pattern.cut_pairs {
+        let d = &pair.difference;
+        line += &format!(
+            " [{}{} {:.2}mm {:.2}%]",
+            pair.piece,
+            if pair.cut_as_pair { " pair" } else { " apart" },
+            d.sew_line_mm,
+            d.area_pct.max(d.width_pct).max(d.height_pct)
+        );
     }
     println!("{line}");
     for p in &g.pattern.pieces {

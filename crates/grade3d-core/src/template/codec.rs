@@ -131,6 +131,9 @@ pub struct Draft {
     pub positions: Vec<DVec3>,
     /// Feature point each node is tied to (`None`: the nearest).
     pub ties: Vec<Option<PointId>>,
+    /// Ring nodes' shifts along their girth, by node
+    /// ([`super::format::Node::ring_shift`]); a node not listed has none.
+    pub ring_shifts: BTreeMap<u32, f64>,
     /// Triangles, counter-clockwise seen from outside.
     pub triangles: Vec<[u32; 3]>,
     /// Profiles: `(start node, end node)` → attached points from start to end.
@@ -205,7 +208,7 @@ pub fn encode(draft: &Draft, body: &FeatureBody) -> Result<Template, CodecError>
             gamma,
             offset: d.to_array(),
             reference: p.to_array(),
-            ring_shift: None,
+            ring_shift: draft.ring_shifts.get(&node).copied(),
         });
     }
     // edge table: one row per undirected edge, start < end

@@ -28,7 +28,12 @@
 //!      [`GarmentOptions::ring_merge_mm`] of one takes its place (with
 //!      [`GarmentOptions::keep_crossings`] keeping its own place along the
 //!      girth, [`super::format::Node::ring_shift`]; else at the point's,
-//!      and the seam steps where it crosses the line);
+//!      and the seam steps where it crosses the line); with
+//!      [`GarmentOptions::ring_spacing_mm`], a crossing farther from every
+//!      point is a ring node too (tied to the nearest, keeping its place),
+//!      and every longer arc of the line between nodes is split evenly by
+//!      ring nodes tied to the nearer point, each at its fraction of the arc
+//!      between its neighbours' places on the body's girth;
 //!    * where a piece's outline changes what it runs along (a seam to
 //!      another piece, a hem, a girth line), and where it turns by more
 //!      than [`GarmentOptions::corner_angle_deg`];
@@ -44,7 +49,11 @@
 //!    * on a garment that is its own mirror image across the body's
 //!      mid-sagittal plane ([`GarmentOptions::symmetric_nodes_mm`]), the free
 //!      nodes on the right replaced by the mirror images of those on the
-//!      left, so that both halves are drafted alike.
+//!      left, so that both halves are drafted alike; with
+//!      [`GarmentOptions::mirror_halves`] the garment is first cut along that
+//!      plane (a centre piece's midline is then an outline of its bands,
+//!      spaced as a seam) and every node the contraction adds on one side
+//!      gets its mirror image.
 //! 5. **Topology** by QEM contraction with the nodes kept
 //!    ([`super::topology`], seed 000 Fig. 8), the surface first cut along
 //!    seams and girth lines so that each outline arc between two nodes
@@ -53,6 +62,10 @@
 //!    each band towards larger angles ([`crate::geom::flip::lawson_flips`],
 //!    [`GarmentOptions::flips`]; the skirt's coarse faces under 10°: 76
 //!    before this and the spacing above, 30 with the flips alone, 13 with both).
+//!    Drafted in halves, the right half's triangles are then replaced by the
+//!    left half's mirrored and its nodes placed at the left's mirror images,
+//!    so that the template is its own mirror image ([`Unmapped::NotMirrored`]
+//!    where a node has no partner).
 //! 6. **Profiles** (seed 000 Eq. (3)): an outline edge carries the dense
 //!    seam, hem or girth polyline between its nodes; an interior edge the
 //!    chord's points projected onto the garment; each resampled by arc
@@ -114,7 +127,7 @@ use super::codec::{between_point, drop_axis, leg_length, GirthWalk};
 use super::codec::{decode, encode, CodecError, Draft, DraftPanel, DraftSeam};
 use super::format::{Below, Between, GradingDefaults, Relocation, Template};
 use super::garment_panels::{weld_panels, PanelError, PanelMesh, WeldOptions};
-use super::girth::{bridged, girth_plane, ring_curves, RING_PLANE_TOLERANCE_M};
+use super::girth::{bridged, girth_plane, ring_curves, shorter_way, RING_PLANE_TOLERANCE_M};
 use crate::body::feature::FeatureBody;
 use crate::body::vocab::{optional_point, point_def, CurveId, PointId, GIRTH_CURVES, POINTS};
 use crate::geom::cut::split_by_plane;
@@ -181,7 +194,10 @@ pub struct GarmentOptions {
     /// Grading defaults stored with the template.
     pub defaults: GradingDefaults,
     /// A garment whose every vertex mirrors onto one of its vertices within
-    /// this distance across the body's mid-sagittal plane gets its free
+    /// this distance (plus [`Self::snap_mm`]: cutting it at its girth lines
+    /// moves vertices onto their planes by up to that, the two sides not
+    /// alike — 2 of the shift dress's 4390 vertices mirrored 1.5 mm off)
+    /// across the body's mid-sagittal plane gets its free
     /// nodes chosen on its left and mirrored (method, step 4), mm; 0: never.
     /// Default 0 (the styles drawn symmetric on the reference body,
     /// [`super::drawn`], ask for 1; on the curve skirt of
@@ -203,6 +219,26 @@ pub struct GarmentOptions {
     /// shift dress, whose seams cross 8–17 mm from the points, the jumps put
     /// a step into every seam at every girth line (issue #18's notes).
     pub keep_crossings: bool,
+    /// Longest arc of a girth line between two of its nodes, mm; 0: the
+    /// line keeps only its feature points' ring nodes and the seams
+    /// crossing it (method, step 4). Where the points lie farther apart
+    /// (a bust's, 110–130 mm on the reference body; an armscye's, one
+    /// point), the extra ring nodes are tied to the nearer of the line's
+    /// feature points and keep their place along the girth
+    /// ([`super::format::Node::ring_shift`]), so that the coarse faces
+    /// along the line need not fan into slivers. Default 0.
+    pub ring_spacing_mm: f64,
+    /// Draft a symmetric garment's right half as the mirror image of its
+    /// left (method, steps 4–5): where [`Self::symmetric_nodes_mm`] finds
+    /// the garment symmetric, it is cut along the body's mid-sagittal plane
+    /// (the centre pieces' midlines become lines of template edges), and
+    /// the right half's coarse triangles are the left half's mirrored, its
+    /// nodes the left's mirror images. The refined garment is then exactly
+    /// symmetric on a symmetric body ([`crate::refine::symmetry`] pairs its
+    /// vertices through the template's triangulation), and its mirror
+    /// pairs are cut as one piece; a contraction of each half on its own
+    /// leaves them triangulated differently. Default false.
+    pub mirror_halves: bool,
     /// The girths the garment declares ease at, by `ease_mm` name
     /// (`neck_base`, `chest`, `bust`, `underbust`, `waist`, `hip`, `thigh`,
     /// `knee`): the girths it is fitted at; empty: every girth it goes round
@@ -239,6 +275,8 @@ impl Default for GarmentOptions {
             symmetric_nodes_mm: 0.0,
             flips: FlipOptions::default(),
             keep_crossings: false,
+            ring_spacing_mm: 0.0,
+            mirror_halves: false,
             ease_at: Vec::new(),
             grain_from_uv: true,
         }
@@ -315,6 +353,11 @@ pub enum Unmapped {
         /// Nodes on its line other than its ring nodes.
         stray_nodes: usize,
     },
+    /// [`GarmentOptions::mirror_halves`] was asked for and the garment is
+    /// symmetric, but its halves could not be drafted as mirror images (a
+    /// node without a partner on the other side, a coarse triangle across
+    /// the midline): each half keeps its own triangulation.
+    NotMirrored,
     /// A leg girth found on one leg only.
     OneSidedGirth {
         /// The girth.
@@ -701,6 +744,15 @@ pub fn author_from_garment(
     };
     let snap = opts.snap_mm * 1e-3;
     cut_tubes(&mut soup, body, &ax, opts.cut, snap)?;
+    // a symmetric garment drafted in halves: cut along the midline first
+    let symmetric_tolerance =
+        if opts.symmetric_nodes_mm > 0.0 { (opts.symmetric_nodes_mm + opts.snap_mm) * 1e-3 } else { 0.0 };
+    let halves = opts.mirror_halves && is_symmetric(&soup, &ax, symmetric_tolerance);
+    if halves {
+        if let Some(mid) = Plane::from_point_normal(ax.centre, ax.left) {
+            soup.split(&mid, snap);
+        }
+    }
 
     // girth lines
     let mut rings: Vec<RingLine> = Vec::new();
@@ -737,16 +789,23 @@ pub fn author_from_garment(
             })
         })
         .collect();
-    let bands = bands(&soup, &ring_edges);
+    // the centre pieces' midlines, where drafted in halves: blocked as girth lines are, spaced as seams
+    let mid_edges = if halves { midline_edges(&soup, &ax) } else { BTreeSet::new() };
+    let blocked: BTreeSet<(u32, u32)> = ring_edges.union(&mid_edges).copied().collect();
+    let bands = bands(&soup, &blocked);
     // every band's outline loops, once (nodes, interior sampling, contraction and profiles read them)
     let loops = band_loops(&soup, &bands);
 
     // nodes
     let mut nodes = NodeSet::default();
     let mut notches: Vec<(String, u32)> = Vec::new();
-    let outline = outline_kinds(&soup, &ring_edges);
+    let outline = outline_kinds(&soup, &ring_edges, &mid_edges);
+    // extra ring nodes between the feature points' ([`GarmentOptions::ring_spacing_mm`])
+    let mut extras = RingExtras::default();
     for r in &rings {
-        ring_nodes(r, body, &soup, &outline, opts, &mut nodes, &mut notches);
+        let e = ring_nodes(r, body, &soup, &outline, opts, &mut nodes, &mut notches);
+        extras.crossings.extend(e.crossings);
+        extras.spaced.extend(e.spaced);
     }
     outline_nodes(&soup, &loops, &outline, opts, &mut nodes);
     let mut listed = BTreeSet::new();
@@ -761,7 +820,7 @@ pub fn author_from_garment(
         }
     }
     interior_nodes(&soup, &bands, &loops, opts, &mut nodes);
-    symmetric_nodes(&soup, &ax, opts.symmetric_nodes_mm * 1e-3, &listed, &mut nodes);
+    symmetric_nodes(&soup, &ax, symmetric_tolerance, &listed, &mut nodes);
 
     // topology: each band its own component, the nodes locked
     // (a band too narrow for its nodes contracts to a triangle another band
@@ -772,7 +831,25 @@ pub fn author_from_garment(
     let used: BTreeSet<u32> = soup.triangles.iter().flatten().copied().collect();
     let mut stuck_rounds = 0;
     let apex = STUCK_APEX * opts.max_edge_mm * 1e-3;
-    let (mut coarse, coarse_panel, coarse_band) = loop {
+    // drafted in halves: a node added on one side gets its mirror image too
+    let used_list: Vec<u32> = used.iter().copied().collect();
+    let used_grid = PointGrid::new(
+        &used_list.iter().map(|&v| soup.positions[v as usize]).collect::<Vec<_>>(),
+        symmetric_tolerance.max(f64::MIN_POSITIVE),
+    );
+    let mirror_new = |nodes: &mut NodeSet, from: usize| {
+        if !halves {
+            return;
+        }
+        let added: Vec<u32> = nodes.order[from..].to_vec();
+        for v in added {
+            let image = used_grid.nearest_within(ax.mirror(soup.positions[v as usize]), symmetric_tolerance);
+            if let Some(i) = image {
+                nodes.add(used_list[i], None);
+            }
+        }
+    };
+    let (mut coarse, mut coarse_panel, coarse_band) = loop {
         let c = contract(&soup, &bands, &nodes)?;
         if !c.stuck.is_empty() {
             stuck_rounds += 1;
@@ -795,6 +872,7 @@ pub fn author_from_garment(
                 };
                 nodes.add(v, None);
             }
+            mirror_new(&mut nodes, before);
             if nodes.order.len() > before {
                 continue;
             }
@@ -807,6 +885,7 @@ pub fn author_from_garment(
         for band in crowded {
             farthest_vertex(&soup, &bands, band, &outline_vertices, &ring_vertices, &mut nodes);
         }
+        mirror_new(&mut nodes, before);
         if nodes.order.len() == before {
             break (c.triangles, c.panel, c.band);
         }
@@ -814,6 +893,29 @@ pub fn author_from_garment(
     // the contraction keeps the nodes, not the triangles' shape: its slivers
     // fold the refined garment along their long edges (module docs, step 5)
     lawson_flips(&soup.positions, &mut coarse, &coarse_band, &opts.flips);
+    // the right half the left's mirror image
+    let mirrored = if halves {
+        let pairs = mirror_pairs(&soup, &soup.names, &ax, opts.mirror_tolerance_mm * 1e-3);
+        let image_of_panel: Vec<usize> = (0..soup.names.len())
+            .map(|p| {
+                pairs
+                    .iter()
+                    .find_map(|[a, b]| {
+                        let (ia, ib) =
+                            (soup.names.iter().position(|n| n == a)?, soup.names.iter().position(|n| n == b)?);
+                        (ia == p).then_some(ib).or((ib == p).then_some(ia))
+                    })
+                    .unwrap_or(p)
+            })
+            .collect();
+        let pairing = MIRROR_NODE_SPACING * opts.max_edge_mm * 1e-3;
+        mirror_halves(&soup, &ax, &nodes, pairing, &image_of_panel, &mut coarse, &mut coarse_panel)
+    } else {
+        None
+    };
+    if halves && mirrored.is_none() {
+        unmapped.push(Unmapped::NotMirrored);
+    }
 
     for r in &rings {
         let stray = r.vertices.iter().filter(|&&v| nodes.ties.get(&v).is_some_and(Option::is_none)).count();
@@ -824,7 +926,10 @@ pub fn author_from_garment(
 
     // node ids in the template: order of `nodes`
     let node_of: BTreeMap<u32, u32> = nodes.order.iter().enumerate().map(|(i, &v)| (v, i as u32)).collect();
-    let positions: Vec<DVec3> = nodes.order.iter().map(|&v| soup.positions[v as usize]).collect();
+    let mut positions: Vec<DVec3> = nodes.order.iter().map(|&v| soup.positions[v as usize]).collect();
+    for (&right, &left) in mirrored.iter().flatten() {
+        positions[node_of[&right] as usize] = ax.mirror(soup.positions[left as usize]);
+    }
     let triangles: Vec<[u32; 3]> = coarse.iter().map(|t| t.map(|v| node_of[&v])).collect();
 
     // profiles
@@ -983,6 +1088,7 @@ pub fn author_from_garment(
         ease_mm: girths.clone(),
         positions,
         ties,
+        ring_shifts: BTreeMap::new(),
         triangles,
         profiles,
         panels,
@@ -1002,21 +1108,25 @@ pub fn author_from_garment(
     // design body reproduces every stored node
     // (a seam's crossing keeps its place along the girth: `ring_shift`)
     let mut draft = draft;
-    let mut first = encode(&draft, body)?;
-    let crossings: BTreeSet<u32> =
+    let mut shifted: BTreeSet<u32> =
         if opts.keep_crossings { ring_set.intersection(&seam_nodes).copied().collect() } else { BTreeSet::new() };
-    let shifts = ring_shifts(&first, body, &rings, &crossings);
-    for (&v, &shift) in &shifts {
-        first.nodes[v as usize].ring_shift = Some(shift);
-    }
-    let placed = decode(&first, body, Relocation::Eq1Frame)?;
+    shifted.extend(extras.crossings.iter().filter_map(|v| node_of.get(v).copied()));
+    draft.ring_shifts = ring_shifts(&draft.ties, &draft.positions, body, &rings, &shifted);
+    let spaced: BTreeMap<u32, Spaced> = extras
+        .spaced
+        .iter()
+        .filter_map(|(v, s)| {
+            let (&from, &to) = (node_of.get(&s.from)?, node_of.get(&s.to)?);
+            Some((*node_of.get(v)?, Spaced { from, to, fraction: s.fraction }))
+        })
+        .collect();
+    let between_shifts = spaced_shifts(&draft, body, &rings, &spaced);
+    draft.ring_shifts.extend(between_shifts);
+    let placed = decode(&encode(&draft, body)?, body, Relocation::Eq1Frame)?;
     for &v in &ring_set {
         draft.positions[v as usize] = placed.positions[v as usize];
     }
-    let mut template = encode(&draft, body)?;
-    for (&v, &shift) in &shifts {
-        template.nodes[v as usize].ring_shift = Some(shift);
-    }
+    let template = encode(&draft, body)?;
     Ok(Authored { template, surface, unmapped, girths, pieces: kept_names, grains })
 }
 
@@ -1026,25 +1136,25 @@ pub fn author_from_garment(
 const RING_SHIFT_MIN_M: f64 = 1e-3;
 
 /// The [`super::format::Node::ring_shift`] of each of `nodes` (ring nodes
-/// where a seam crosses one of the girth lines `rings`) whose place along
-/// its girth, in `t`
-/// as encoded on the design body `body`, lies more than
+/// where a seam crosses one of the girth lines `rings`, or between their
+/// feature points' nodes) whose place along its girth, at `positions` with
+/// its tie in `ties` on the design body `body`, lies more than
 /// [`RING_SHIFT_MIN_M`] from its feature point's: the arc from the point's
 /// parameter on the bridged girth to the node's (the loop point in the
 /// node's direction from the loop's centroid, as decoding eases it
 /// outwards), the shorter way, over the loop's length.
-fn ring_shifts(t: &Template, body: &FeatureBody, rings: &[RingLine], nodes: &BTreeSet<u32>) -> BTreeMap<u32, f64> {
+fn ring_shifts(
+    ties: &[Option<PointId>],
+    positions: &[DVec3],
+    body: &FeatureBody,
+    rings: &[RingLine],
+    nodes: &BTreeSet<u32>,
+) -> BTreeMap<u32, f64> {
     let mut out = BTreeMap::new();
     for &v in nodes {
-        let n = &t.nodes[v as usize];
-        let def = point_def(n.point);
-        let p = DVec3::from_array(n.reference);
-        let Some(r) = rings.iter().find(|r| {
-            (r.curve == def.f1 || r.curve == def.f2) && r.plane.signed_distance(p).abs() <= RING_PLANE_TOLERANCE_M
-        }) else {
-            continue;
-        };
-        let (Some(c), Some(q)) = (body.curves.get(&r.curve), body.points.get(&n.point)) else { continue };
+        let (Some(&Some(point)), Some(&p)) = (ties.get(v as usize), positions.get(v as usize)) else { continue };
+        let Some(r) = ring_of(rings, point, p) else { continue };
+        let (Some(c), Some(q)) = (body.curves.get(&r.curve), body.points.get(&point)) else { continue };
         let loop_ = bridged(&c.polyline, &r.plane);
         let total = loop_.length();
         let (Some(at_point), Some(at_node)) = (loop_.closest(q.position), loop_point_towards(&loop_, &r.plane, p))
@@ -1061,6 +1171,74 @@ fn ring_shifts(t: &Template, body: &FeatureBody, rings: &[RingLine], nodes: &BTr
         if d.abs() > RING_SHIFT_MIN_M {
             out.insert(v, d / total);
         }
+    }
+    out
+}
+
+/// The girth line of `rings` that a node tied to `point` at `p` lies on:
+/// one of the point's curves, within [`RING_PLANE_TOLERANCE_M`] of its plane.
+fn ring_of(rings: &[RingLine], point: PointId, p: DVec3) -> Option<&RingLine> {
+    let def = point_def(point);
+    rings.iter().find(|r| {
+        (r.curve == def.f1 || r.curve == def.f2) && r.plane.signed_distance(p).abs() <= RING_PLANE_TOLERANCE_M
+    })
+}
+
+/// The [`super::format::Node::ring_shift`] of each extra ring node
+/// `spaced` (node ids): on the bridged girth of its line, at its fraction
+/// of the arc between its two neighbours' places (each its feature point's
+/// parameter shifted by its own `draft.ring_shifts`, or the loop point in
+/// its direction where it is no ring node of this line), the arc taken
+/// the way round the node lies; as a fraction of the loop's length from its
+/// own feature point's parameter. On a garment drawn symmetric the extra
+/// nodes of the two sides so get mirror-image places, whichever section
+/// vertices they were picked at.
+fn spaced_shifts(
+    draft: &Draft,
+    body: &FeatureBody,
+    rings: &[RingLine],
+    spaced: &BTreeMap<u32, Spaced>,
+) -> BTreeMap<u32, f64> {
+    let mut out = BTreeMap::new();
+    for (&v, sp) in spaced {
+        let (Some(&Some(point)), Some(&p)) = (draft.ties.get(v as usize), draft.positions.get(v as usize)) else {
+            continue;
+        };
+        let Some(r) = ring_of(rings, point, p) else { continue };
+        let Some(c) = body.curves.get(&r.curve) else { continue };
+        let loop_ = bridged(&c.polyline, &r.plane);
+        let total = loop_.length();
+        if total <= 0.0 {
+            continue;
+        }
+        let point_param = |q: PointId| body.points.get(&q).and_then(|fp| loop_.closest(fp.position)).map(|c| c.s);
+        let param = |node: u32| -> Option<f64> {
+            let at = *draft.positions.get(node as usize)?;
+            match draft.ties.get(node as usize).copied().flatten() {
+                Some(q) if ring_of(rings, q, at).is_some_and(|o| o.curve == r.curve) => {
+                    Some(point_param(q)? + draft.ring_shifts.get(&node).copied().unwrap_or(0.0) * total)
+                }
+                _ => loop_point_towards(&loop_, &r.plane, at),
+            }
+        };
+        let (Some(sa), Some(sb), Some(sv), Some(own)) =
+            (param(sp.from), param(sp.to), loop_point_towards(&loop_, &r.plane, p), point_param(point))
+        else {
+            continue;
+        };
+        // the arcs from `from` to `to` either way round (the whole loop where they are one node)
+        let (forward, backward) = match (sb - sa).rem_euclid(total) {
+            d if sp.from == sp.to || d <= 0.0 => (total, total),
+            d => (d, total - d),
+        };
+        let (ahead, behind) = (sa + sp.fraction * forward, sa - sp.fraction * backward);
+        let off = |s: f64| shorter_way(s.rem_euclid(total), sv, total).abs();
+        let s = if off(ahead) <= off(behind) { ahead } else { behind };
+        let mut d = (s - own).rem_euclid(total);
+        if d > 0.5 * total {
+            d -= total;
+        }
+        out.insert(v, d / total);
     }
     out
 }
@@ -1118,12 +1296,10 @@ fn check(opts: &GarmentOptions) -> Result<(), FromGarmentError> {
     positive("snap_mm", opts.snap_mm)?;
     positive("mirror_tolerance_mm", opts.mirror_tolerance_mm)?;
     positive("max_tie_mm", opts.max_tie_mm)?;
-    if !(opts.symmetric_nodes_mm.is_finite() && opts.symmetric_nodes_mm >= 0.0) {
-        return Err(FromGarmentError::Option {
-            name: "symmetric_nodes_mm",
-            value: opts.symmetric_nodes_mm,
-            expected: "zero or positive and finite",
-        });
+    for (name, value) in [("symmetric_nodes_mm", opts.symmetric_nodes_mm), ("ring_spacing_mm", opts.ring_spacing_mm)] {
+        if !(value.is_finite() && value >= 0.0) {
+            return Err(FromGarmentError::Option { name, value, expected: "zero or positive and finite" });
+        }
     }
     if opts.profile_points < 2 || opts.profile_points > 64 {
         return Err(FromGarmentError::Option {
@@ -1336,9 +1512,16 @@ enum Along {
     Seam(usize, usize),
     Free(usize),
     Ring,
+    /// A centre piece's midline, where drafted in halves
+    /// ([`GarmentOptions::mirror_halves`]).
+    Midline,
 }
 
-fn outline_kinds(soup: &Soup, ring_edges: &BTreeSet<(u32, u32)>) -> BTreeMap<(u32, u32), Along> {
+fn outline_kinds(
+    soup: &Soup,
+    ring_edges: &BTreeSet<(u32, u32)>,
+    mid_edges: &BTreeSet<(u32, u32)>,
+) -> BTreeMap<(u32, u32), Along> {
     let mut faces: BTreeMap<(u32, u32), Vec<usize>> = BTreeMap::new();
     for (f, t) in soup.triangles.iter().enumerate() {
         for k in 0..3 {
@@ -1352,6 +1535,7 @@ fn outline_kinds(soup: &Soup, ring_edges: &BTreeSet<(u32, u32)>) -> BTreeMap<(u3
         // at the hip): no outline node may break its ring
         let kind = match fs[..] {
             _ if ring_edges.contains(&e) => Some(Along::Ring),
+            _ if mid_edges.contains(&e) => Some(Along::Midline),
             [f] => Some(Along::Free(soup.panel[f])),
             [f, g] if soup.panel[f] != soup.panel[g] => {
                 let (p, q) = (soup.panel[f], soup.panel[g]);
@@ -1392,7 +1576,8 @@ impl NodeSet {
     }
 }
 
-/// Ring nodes of one girth line (method, step 4, first item).
+/// Ring nodes of one girth line (method, step 4, first item); returns the
+/// extra ones ([`GarmentOptions::ring_spacing_mm`]).
 fn ring_nodes(
     r: &RingLine,
     body: &FeatureBody,
@@ -1401,8 +1586,9 @@ fn ring_nodes(
     opts: &GarmentOptions,
     nodes: &mut NodeSet,
     notches: &mut Vec<(String, u32)>,
-) {
-    let Some(curve) = body.curves.get(&r.curve) else { return };
+) -> RingExtras {
+    let mut extra = RingExtras::default();
+    let Some(curve) = body.curves.get(&r.curve) else { return extra };
     let centre = curve.polyline.centroid();
     let (e1, e2) = r.plane.basis();
     let angle = |p: DVec3| {
@@ -1414,6 +1600,7 @@ fn ring_nodes(
         outline.iter().filter(|(_, k)| !matches!(k, Along::Ring)).flat_map(|(e, _)| [e.0, e.1]).collect();
     let crossings: Vec<u32> = r.vertices.iter().copied().filter(|v| on_outline.contains(v)).collect();
     let mut used_crossings = BTreeSet::new();
+    let mut point_at: Vec<(PointId, usize)> = Vec::new();
     let points: Vec<PointId> = POINTS
         .iter()
         .filter(|d| d.f1 == r.curve || d.f2 == r.curve)
@@ -1454,12 +1641,111 @@ fn ring_nodes(
             None => best,
         };
         nodes.add(v, Some(p));
+        if let Some(k) = r.vertices.iter().position(|&x| x == v) {
+            point_at.push((p, k));
+        }
     }
     for &c in &crossings {
         notches.push((r.name.to_owned(), c));
-        if !used_crossings.contains(&c) {
-            nodes.add(c, None);
+        if used_crossings.contains(&c) {
+            continue;
         }
+        // where the line is split by extra ring nodes, a crossing far from every point is one
+        // too, tied to the nearest (keeping its place: `ring_shift`); else a free node
+        let at = soup.positions[c as usize];
+        let nearest = point_at
+            .iter()
+            .map(|&(p, k)| (p, soup.positions[r.vertices[k] as usize].distance(at)))
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        match nearest {
+            Some((p, _)) if opts.ring_spacing_mm > 0.0 => {
+                nodes.add(c, Some(p));
+                extra.crossings.insert(c);
+            }
+            _ => nodes.add(c, None),
+        }
+    }
+    if opts.ring_spacing_mm > 0.0 {
+        spaced_ring_nodes(r, soup, &point_at, opts.ring_spacing_mm * 1e-3, nodes, &mut extra.spaced);
+    }
+    extra
+}
+
+/// The ring nodes [`ring_nodes`] adds beyond its feature points' and the
+/// crossings that take their place, where a girth line is split
+/// ([`GarmentOptions::ring_spacing_mm`]); soup vertices.
+#[derive(Debug, Default)]
+struct RingExtras {
+    /// Seam and hem crossings far from every point, tied to the nearest.
+    crossings: BTreeSet<u32>,
+    /// Nodes between two of the line's nodes.
+    spaced: BTreeMap<u32, Spaced>,
+}
+
+/// An extra ring node between two nodes of its girth line
+/// ([`GarmentOptions::ring_spacing_mm`]), soup vertices.
+#[derive(Debug, Clone, Copy)]
+struct Spaced {
+    /// The line's node before it, in the line's order.
+    from: u32,
+    /// The one after it (`from` itself on a line with one node).
+    to: u32,
+    /// Its place between them, a fraction of the arc.
+    fraction: f64,
+}
+
+/// Extra ring nodes along girth line `r` ([`GarmentOptions::ring_spacing_mm`]):
+/// each arc of the line between two of its nodes longer than `spacing` (m)
+/// is split evenly, the new nodes (section vertices, added to `extra`) tied
+/// to the feature point whose section vertex (`point_at`: loop index) lies
+/// nearest along the line.
+fn spaced_ring_nodes(
+    r: &RingLine,
+    soup: &Soup,
+    point_at: &[(PointId, usize)],
+    spacing: f64,
+    nodes: &mut NodeSet,
+    extra: &mut BTreeMap<u32, Spaced>,
+) {
+    let n = r.vertices.len();
+    if n < 3 || point_at.is_empty() {
+        return;
+    }
+    let mut cum = vec![0.0; n + 1];
+    for k in 0..n {
+        let (a, b) = (r.vertices[k], r.vertices[(k + 1) % n]);
+        cum[k + 1] = cum[k] + soup.positions[a as usize].distance(soup.positions[b as usize]);
+    }
+    let total = cum[n];
+    let along = |a: usize, b: usize| {
+        let d = (cum[a] - cum[b]).abs();
+        d.min(total - d)
+    };
+    let at: Vec<usize> = (0..n).filter(|&k| nodes.contains(r.vertices[k])).collect();
+    if at.is_empty() {
+        return;
+    }
+    let mut added = Vec::new();
+    for i in 0..at.len() {
+        let (k0, k1) = (at[i], at[(i + 1) % at.len()]);
+        let s0 = cum[k0];
+        let arc = if at.len() == 1 { total } else { (cum[k1] - s0).rem_euclid(total) };
+        let parts = (arc / spacing).ceil() as usize;
+        for m in 1..parts {
+            let fraction = m as f64 / parts as f64;
+            let s = (s0 + arc * fraction).rem_euclid(total);
+            let k = (0..n).min_by(|&x, &y| (cum[x] - s).abs().total_cmp(&(cum[y] - s).abs())).unwrap_or(0);
+            added.push((k, Spaced { from: r.vertices[k0], to: r.vertices[k1], fraction }));
+        }
+    }
+    for (k, spaced) in added {
+        let v = r.vertices[k];
+        if nodes.contains(v) {
+            continue;
+        }
+        let Some(&(p, _)) = point_at.iter().min_by(|a, b| along(a.1, k).total_cmp(&along(b.1, k))) else { continue };
+        nodes.add(v, Some(p));
+        extra.insert(v, spaced);
     }
 }
 
@@ -1565,6 +1851,116 @@ fn outline_nodes(
     }
 }
 
+/// A node's mirror partner may lie this fraction of
+/// [`GarmentOptions::max_edge_mm`] from its mirror image (ring nodes are
+/// picked on each side's own section of a girth, within a section edge of
+/// each other's images; free nodes are mirrored exactly).
+const MIRROR_NODE_SPACING: f64 = 0.25;
+
+/// A vertex this close to the mid-sagittal plane lies on it, m (the
+/// midline cut moves its vertices onto the plane; a girth cut after it may
+/// move them within rounding).
+const ON_MIDLINE_M: f64 = 1e-6;
+
+/// Whether every used vertex of `soup` mirrors onto a used vertex within
+/// `tolerance` (m; 0: never) across the body's mid-sagittal plane.
+fn is_symmetric(soup: &Soup, ax: &Axes, tolerance: f64) -> bool {
+    if tolerance <= 0.0 {
+        return false;
+    }
+    let used: Vec<u32> = soup.triangles.iter().flatten().copied().collect::<BTreeSet<u32>>().into_iter().collect();
+    let points: Vec<DVec3> = used.iter().map(|&v| soup.positions[v as usize]).collect();
+    let grid = PointGrid::new(&points, tolerance);
+    points.iter().all(|&p| grid.nearest_within(ax.mirror(p), tolerance).is_some())
+}
+
+/// The edges of `soup` along the body's mid-sagittal plane between two
+/// faces of one piece on either side of it (a centre piece's midline after
+/// the midline cut).
+fn midline_edges(soup: &Soup, ax: &Axes) -> BTreeSet<(u32, u32)> {
+    let side = |p: DVec3| (p - ax.centre).dot(ax.left);
+    let mut faces: BTreeMap<(u32, u32), Vec<usize>> = BTreeMap::new();
+    for (f, t) in soup.triangles.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            faces.entry((a.min(b), a.max(b))).or_default().push(f);
+        }
+    }
+    let centroid_side =
+        |f: usize| side(soup.triangles[f].iter().map(|&v| soup.positions[v as usize]).sum::<DVec3>() / 3.0);
+    faces
+        .into_iter()
+        .filter(|(e, fs)| {
+            let on = |v: u32| side(soup.positions[v as usize]).abs() <= ON_MIDLINE_M;
+            on(e.0)
+                && on(e.1)
+                && matches!(fs[..], [f, g] if soup.panel[f] == soup.panel[g] && centroid_side(f) * centroid_side(g) < 0.0)
+        })
+        .map(|(e, _)| e)
+        .collect()
+}
+
+/// Mirror drafting ([`GarmentOptions::mirror_halves`], method step 5): the
+/// coarse triangles of the body's right half replaced by the mirror images
+/// of the left half's (`(a, b, c)` → `(m(a), m(c), m(b))`, the piece its
+/// mirror piece by `image_of_panel`), `m` pairing every node off the
+/// midline with the node nearest its mirror image — mutual, within
+/// `pairing` (m). Returns the right nodes' partners (soup vertices, right →
+/// left); `None`, the triangles untouched, where a node has no partner or
+/// a triangle spans the midline.
+fn mirror_halves(
+    soup: &Soup,
+    ax: &Axes,
+    nodes: &NodeSet,
+    pairing: f64,
+    image_of_panel: &[usize],
+    coarse: &mut Vec<[u32; 3]>,
+    coarse_panel: &mut Vec<usize>,
+) -> Option<BTreeMap<u32, u32>> {
+    let side = |v: u32| (soup.positions[v as usize] - ax.centre).dot(ax.left);
+    let (left, right): (Vec<u32>, Vec<u32>) =
+        nodes.order.iter().copied().filter(|&v| side(v).abs() > ON_MIDLINE_M).partition(|&v| side(v) > 0.0);
+    let nearest = |p: DVec3, among: &[u32]| {
+        among
+            .iter()
+            .copied()
+            .map(|w| (w, soup.positions[w as usize].distance(p)))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .filter(|&(_, d)| d <= pairing)
+            .map(|(w, _)| w)
+    };
+    let mut image: BTreeMap<u32, u32> = BTreeMap::new();
+    let mut partners = BTreeMap::new();
+    for &v in &left {
+        let w = nearest(ax.mirror(soup.positions[v as usize]), &right)?;
+        if nearest(ax.mirror(soup.positions[w as usize]), &left) != Some(v) {
+            return None;
+        }
+        image.insert(v, w);
+        partners.insert(w, v);
+    }
+    if partners.len() != right.len() {
+        return None;
+    }
+    let m = |v: u32| if side(v).abs() <= ON_MIDLINE_M { Some(v) } else { image.get(&v).copied() };
+    let mut triangles = Vec::new();
+    let mut panels = Vec::new();
+    for (t, &p) in coarse.iter().zip(coarse_panel.iter()) {
+        let sides = t.map(side);
+        if sides.iter().all(|&d| d >= -ON_MIDLINE_M) && sides.iter().any(|&d| d > ON_MIDLINE_M) {
+            triangles.push(*t);
+            panels.push(p);
+            triangles.push([m(t[0])?, m(t[2])?, m(t[1])?]);
+            panels.push(*image_of_panel.get(p)?);
+        } else if !(sides.iter().all(|&d| d <= ON_MIDLINE_M) && sides.iter().any(|&d| d < -ON_MIDLINE_M)) {
+            return None;
+        }
+    }
+    *coarse = triangles;
+    *coarse_panel = panels;
+    Some(partners)
+}
+
 /// Symmetric node choice (method, step 4, last item): on a garment that is
 /// its own mirror image across the body's mid-sagittal plane (every used
 /// vertex's mirror image within `tolerance` of a used vertex), the free
@@ -1576,16 +1972,13 @@ fn outline_nodes(
 /// their girth's points, symmetric already), the caller's nodes and nodes
 /// on the plane stay. Returns whether the garment was found symmetric.
 fn symmetric_nodes(soup: &Soup, ax: &Axes, tolerance: f64, listed: &BTreeSet<u32>, nodes: &mut NodeSet) -> bool {
-    if tolerance <= 0.0 {
+    if !is_symmetric(soup, ax, tolerance) {
         return false;
     }
     let used: Vec<u32> = soup.triangles.iter().flatten().copied().collect::<BTreeSet<u32>>().into_iter().collect();
     let points: Vec<DVec3> = used.iter().map(|&v| soup.positions[v as usize]).collect();
     let grid = PointGrid::new(&points, tolerance);
     let image = |v: u32| grid.nearest_within(ax.mirror(soup.positions[v as usize]), tolerance).map(|i| used[i]);
-    if used.iter().any(|&v| image(v).is_none()) {
-        return false;
-    }
     let side = |v: u32| (soup.positions[v as usize] - ax.centre).dot(ax.left);
     let free = |v: u32| nodes.ties.get(&v).is_some_and(Option::is_none) && !listed.contains(&v);
     let mut out = NodeSet::default();
