@@ -4,7 +4,10 @@
 //! |E_s| and darts (mouth height above the hip plane, apex height, intake).
 //!
 //! `cargo run --release --example authored_probe -- [filter]`
-//! (`POP=6,15,9s` adds population bodies, `9s` body 9's scan-like copy;
+//! (the filter picks ASTM sizes by name; `FIXTURES=1` adds the fixture
+//! bodies, `FIXTURES=older` those whose name contains it; each grade's
+//! line ends with its mirror pairs, cut as one or apart, and their sew-line
+//! and extent differences; `POP=6,15,9s` adds population bodies, `9s` body 9's scan-like copy;
 //! `DECIDE=1` decides the darts on every body instead of carrying the
 //! block's; `AUTO='{"enabled":false}'` overrides the found-dart search's
 //! options; `NODES=1` lists how each node is placed; `TEMPLATE=a-line-skirt`
@@ -21,7 +24,10 @@
 //! `REFIT=k` adds nodes where the graded surface strays most, `k` rounds.
 //! Any template: `SVG=dir` writes each grade's pieces, `GRADED=dir` each
 //! graded surface (OBJ), `COARSE=path` the coarse mesh on its design body,
-//! `PANELS=1` flattens the graded panels freely (as the drawn ones), and
+//! `PANELS=1` flattens every grade's panels freely (as the drawn ones;
+//! with `DUMP=dir` each panel's OBJ too), and
+//! `FAR=mm` lists each body's coarse nodes whose clearance from the body
+//! differs from the design body's by more than `mm`;
 //! `NOCOLL=1`, `UNGUIDED=1`, `FREE_SEAMS=1`, `LEVELS=n` turn off collision
 //! on the design body, the guided dart rules, the seam negotiation, or set
 //! the subdivision levels.
@@ -208,9 +214,8 @@ fn main() {
         go.pattern.auto_darts = serde_json::from_str(&a).unwrap();
     }
     let design_obstacle = obstacle(&design);
-    if std::env::var("PANELS").is_ok() {
-        // the graded surface cut into its panels, each flattened freely (as the drawn pieces are)
-        let g = grade_with_darts(&t, &design, None, "design", &go, DartSource::Decide).unwrap();
+    // the graded surface cut into its panels, each flattened freely (as the drawn pieces are)
+    let panels_flat = |g: &Graded| {
         let (panels, _) = grade3d::pattern::panels::cut(&t, &g.cut_positions, &g.mesh.triangles, &g.lineage).unwrap();
         let pieces: Vec<PanelMesh> = panels
             .iter()
@@ -222,6 +227,10 @@ fn main() {
             })
             .collect();
         flat_report(&pieces);
+    };
+    let panels_too = std::env::var("PANELS").is_ok();
+    if panels_too {
+        panels_flat(&grade_with_darts(&t, &design, None, "design", &go, DartSource::Decide).unwrap());
     }
     let g = grade_with_darts(
         &t,
@@ -265,12 +274,41 @@ fn main() {
             }
         }
     }
+    // `FAR=mm`: each body's coarse nodes whose clearance from the body differs from the design body's by more
+    let far: Option<f64> = std::env::var("FAR").ok().map(|f| f.parse().unwrap());
+    let clearance = |b: &FeatureBody| -> Vec<f64> {
+        let index = grade3d::geom::query::SphereIndex::new(&b.mesh);
+        let m = grade3d::template::codec::decode(&t, b, grade3d::template::format::Relocation::Eq1Frame).unwrap();
+        m.positions.iter().map(|&p| index.closest_point(&b.mesh, p).point.distance(p) * 1e3).collect()
+    };
+    let design_clearance = far.map(|_| clearance(&design));
     for (name, body) in &bodies {
+        if let (Some(limit), Some(before)) = (far, &design_clearance) {
+            for (i, (now, then)) in clearance(body).iter().zip(before).enumerate() {
+                if (now - then).abs() > limit {
+                    let n = &t.nodes[i];
+                    let kind = if t.below.iter().any(|b| b.node == i as u32) {
+                        "below"
+                    } else if t.between.iter().any(|b| b.node == i as u32) {
+                        "between"
+                    } else {
+                        "eq1"
+                    };
+                    println!(
+                        "  {name}: node {i} ({kind}, {}) clearance {then:.0} → {now:.0} mm, at {:?}",
+                        n.point, n.reference
+                    );
+                }
+            }
+        }
         let o = obstacle(body);
         let src = if decide { DartSource::Decide } else { DartSource::Block(&plan) };
         let start = std::time::Instant::now();
         match grade_with_darts(&t, body, Some(&o), name, &go, src) {
             Ok(g) => {
+                if panels_too {
+                    panels_flat(&g);
+                }
                 print(body, name, &g);
                 println!("    {:.1} s", start.elapsed().as_secs_f64());
             }
@@ -429,8 +467,9 @@ fn flat_report(pieces: &[PanelMesh]) {
         }
         if let Ok(dir) = std::env::var("DUMP") {
             std::fs::write(format!("{dir}/strain-{}.txt", p.name), dump).unwrap();
+            write_mesh(&format!("{dir}/{}.obj", p.name), &p.name, p.positions.clone(), p.triangles.clone());
         }
-        line += &format!(" {}:{:.2}%", p.name, d.strain_p95 * 100.0);
+        line += &format!(" {}:{:.2}%({} flipped)", p.name, d.strain_p95 * 100.0, f.flipped);
     }
     println!("{line}");
 }

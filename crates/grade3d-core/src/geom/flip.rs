@@ -34,6 +34,13 @@
 //! whatever the dihedral angle, the new triangles checked against the
 //! other triangle's normal alone.
 //!
+//! A **cap** — a triangle with an angle of at least
+//! [`FlipOptions::cap_angle_deg`], its corners nearly on one line — has no
+//! normal worth the name, so it flips the same way wherever it lies (the
+//! contraction leaves fans of them along a straight seam whose nodes are
+//! closer than the band's interior ones: the shift dress's side seams below
+//! the hip, down to 0.08°).
+//!
 //! Passes run over the edges in a fixed order until one flips nothing (or
 //! [`FlipOptions::max_passes`]); a triangle flipped in a pass is not
 //! flipped again in that pass. The result is deterministic.
@@ -65,11 +72,15 @@ pub struct FlipOptions {
     /// regions that flips whatever its dihedral (module docs), degrees.
     /// Default 150.
     pub ear_angle_deg: f64,
+    /// Least angle at a corner that makes its triangle a *cap* (module
+    /// docs), flipped like an ear wherever it lies, degrees; 180: none.
+    /// Default 180.
+    pub cap_angle_deg: f64,
 }
 
 impl Default for FlipOptions {
     fn default() -> Self {
-        Self { max_dihedral_deg: 40.0, min_gain_deg: 0.5, max_passes: 64, ear_angle_deg: 150.0 }
+        Self { max_dihedral_deg: 40.0, min_gain_deg: 0.5, max_passes: 64, ear_angle_deg: 150.0, cap_angle_deg: 180.0 }
     }
 }
 
@@ -102,6 +113,7 @@ pub fn lawson_flips(positions: &[DVec3], triangles: &mut [[u32; 3]], region: &[u
     let cos_dihedral = opts.max_dihedral_deg.to_radians().cos();
     let gain = opts.min_gain_deg.to_radians();
     let ear_angle = opts.ear_angle_deg.to_radians();
+    let cap_angle = opts.cap_angle_deg.to_radians();
     let pos = |v: u32| positions[v as usize];
     let mut flips = 0;
     for _ in 0..opts.max_passes {
@@ -144,8 +156,9 @@ pub fn lawson_flips(positions: &[DVec3], triangles: &mut [[u32; 3]], region: &[u
                     w.len() == 2 && w.iter().any(|&(h, _)| h != face && region.get(h) != region.get(face))
                 })
             };
-            let ear_c = on_line(b, c, f) && on_line(c, a, f) && angle_at(pc, pa, pb) >= ear_angle;
-            let ear_d = on_line(a, d, g) && on_line(d, b, g) && angle_at(pd, pb, pa) >= ear_angle;
+            let (at_c, at_d) = (angle_at(pc, pa, pb), angle_at(pd, pb, pa));
+            let ear_c = (on_line(b, c, f) && on_line(c, a, f) && at_c >= ear_angle) || at_c >= cap_angle;
+            let ear_d = (on_line(a, d, g) && on_line(d, b, g) && at_d >= ear_angle) || at_d >= cap_angle;
             let mean = match (ear_c, ear_d) {
                 (true, false) => n2,
                 (false, true) => n1,
@@ -196,6 +209,31 @@ mod tests {
             }
         }
         uses
+    }
+
+    /// A cap (its corners nearly on a line, lifted a little out of the
+    /// surface: its normal 84° from its neighbour's) flips its long edge
+    /// with `cap_angle_deg` 170 and stays with the default (none); the new
+    /// triangles face the neighbour's way.
+    #[test]
+    fn a_cap_flips_whatever_its_normal_when_asked() {
+        let p = [
+            DVec3::new(-1.0, 0.0, 0.0),
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(0.0, 0.001, 0.01),
+            DVec3::new(0.0, -1.0, 0.0),
+        ];
+        assert!(angle_at(p[2], p[0], p[1]).to_degrees() > 178.0);
+        let mut t = vec![[0, 1, 2], [1, 0, 3]];
+        assert_eq!(lawson_flips(&p, &mut t, &[0, 0], &FlipOptions::default()), 0);
+        let caps = FlipOptions { cap_angle_deg: 170.0, ..FlipOptions::default() };
+        assert_eq!(lawson_flips(&p, &mut t, &[0, 0], &caps), 1);
+        let uses = edge_uses(&t);
+        assert!(uses.contains_key(&(2, 3)) && !uses.contains_key(&(0, 1)), "{uses:?}");
+        for f in &t {
+            let n = normal(p[f[0] as usize], p[f[1] as usize], p[f[2] as usize]).unwrap();
+            assert!(n.z > 0.99, "{t:?}");
+        }
     }
 
     /// A kite split along its long diagonal (two slivers) flips to the short one.
