@@ -105,6 +105,18 @@ fn normal(a: DVec3, b: DVec3, c: DVec3) -> Option<DVec3> {
     (b - a).cross(c - a).try_normalize()
 }
 
+/// The two triangles that replace `t` and `s` when their shared edge is
+/// flipped: `t` read from its corner `k` as `(a, b, c)`, `s` running the
+/// edge the other way (`b → a`) with third corner `d`: `(a, d, c)` and
+/// `(d, b, c)`, oriented as the pair was; also `d`. `None` where `s` does
+/// not run `t`'s edge `a → b` backwards.
+pub fn flipped_pair(t: [u32; 3], k: usize, s: [u32; 3]) -> Option<([[u32; 3]; 2], u32)> {
+    let (a, b, c) = (t[k % 3], t[(k + 1) % 3], t[(k + 2) % 3]);
+    let l = (0..3).find(|&l| s[l] == b && s[(l + 1) % 3] == a)?;
+    let d = s[(l + 2) % 3];
+    Some(([[a, d, c], [d, b, c]], d))
+}
+
 /// Flips the edges of `triangles` (corners into `positions`) by the
 /// max–min angle criterion (module docs); an edge flips only between two
 /// triangles of the same `region`. Returns the number of flips.
@@ -133,17 +145,14 @@ pub fn lawson_flips(positions: &[DVec3], triangles: &mut [[u32; 3]], region: &[u
         let mut made: BTreeSet<(u32, u32)> = BTreeSet::new();
         let mut pass_flips = 0;
         for u in uses.values() {
-            let &[(f, k), (g, l)] = u.as_slice() else { continue };
+            let &[(f, k), (g, _)] = u.as_slice() else { continue };
             if region.get(f) != region.get(g) || touched.contains(&f) || touched.contains(&g) {
                 continue;
             }
             let (t, s) = (triangles[f], triangles[g]);
             // t = (a, b, c) from corner k; s must run the edge the other way
             let (a, b, c) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
-            if s[l] != b || s[(l + 1) % 3] != a {
-                continue;
-            }
-            let d = s[(l + 2) % 3];
+            let Some((new, d)) = flipped_pair(t, k, s) else { continue };
             let cd = (c.min(d), c.max(d));
             if c == d || uses.contains_key(&cd) || made.contains(&cd) {
                 continue;
@@ -174,8 +183,7 @@ pub fn lawson_flips(positions: &[DVec3], triangles: &mut [[u32; 3]], region: &[u
             if after <= before + gain {
                 continue;
             }
-            triangles[f] = [a, d, c];
-            triangles[g] = [d, b, c];
+            [triangles[f], triangles[g]] = new;
             touched.insert(f);
             touched.insert(g);
             made.insert(cd);

@@ -131,7 +131,7 @@ use super::girth::{bridged, girth_plane, ring_curves, shorter_way, RING_PLANE_TO
 use crate::body::feature::FeatureBody;
 use crate::body::vocab::{optional_point, point_def, CurveId, PointId, GIRTH_CURVES, POINTS};
 use crate::geom::cut::split_by_plane;
-use crate::geom::flip::{lawson_flips, FlipOptions};
+use crate::geom::flip::{flipped_pair, lawson_flips, FlipOptions};
 use crate::geom::mesh::{boundary_loops, TriMesh, VertexId};
 use crate::geom::plane::Plane;
 use crate::geom::polyline::{tape_length, Polyline};
@@ -2089,7 +2089,8 @@ const CROWDED_FLIP_PASSES: usize = 64;
 /// Untangles crowded bands ([`crowded_bands`]) by edge flips within a band:
 /// each triangle on the same three nodes as another's, or on an edge more
 /// than two use, has an edge it shares with a triangle of its own band
-/// flipped (`(p, q, r)`, `(q, p, s)` → `(r, p, s)`, `(r, s, q)`) where the
+/// flipped ([`flipped_pair`]: `(p, q, r)`, `(q, p, s)` → `(p, s, r)`,
+/// `(s, q, r)`) where the
 /// new edge `r s` is not in the mesh yet and both new triangles face the
 /// way the old pair did. Returns whether any edge was flipped.
 fn flip_crowded(positions: &[DVec3], triangles: &mut [[u32; 3]], band: &[usize]) -> bool {
@@ -2124,17 +2125,15 @@ fn flip_crowded(positions: &[DVec3], triangles: &mut [[u32; 3]], band: &[usize])
                     continue;
                 };
                 let u = triangles[g];
-                let Some(j) = (0..3).find(|&j| u[j] == q && u[(j + 1) % 3] == p) else { continue };
-                let s = u[(j + 2) % 3];
+                let Some((new, s)) = flipped_pair(t, k, u) else { continue };
                 if s == r || by_edge.contains_key(&(r.min(s), r.max(s))) {
                     continue;
                 }
-                let (old, new) = (normal(t) + normal(u), [[r, p, s], [r, s, q]]);
+                let old = normal(t) + normal(u);
                 if new.iter().any(|&n| normal(n).dot(old) <= 0.0) {
                     continue;
                 }
-                triangles[f] = new[0];
-                triangles[g] = new[1];
+                [triangles[f], triangles[g]] = new;
                 changed = true;
                 break;
             }
