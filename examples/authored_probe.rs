@@ -25,7 +25,8 @@
 //! Any template: `SVG=dir` writes each grade's pieces, `GRADED=dir` each
 //! graded surface (OBJ), `COARSE=path` the coarse mesh on its design body,
 //! `PANELS=1` flattens every grade's panels freely (as the drawn ones;
-//! with `DUMP=dir` each panel's OBJ too), and
+//! with `DUMP=dir` each panel's OBJ too; `FLATTEN='{"pin_tie":0.05}'` sets
+//! that flattening's options), and
 //! `FAR=mm` lists each body's coarse nodes whose clearance from the body
 //! differs from the design body's by more than `mm`;
 //! `NOCOLL=1`, `UNGUIDED=1`, `FREE_SEAMS=1`, `LEVELS=n` turn off collision
@@ -452,7 +453,10 @@ fn flat_report(pieces: &[PanelMesh]) {
         let pos: TiVec<PanelVertex, glam::DVec3> = p.positions.iter().copied().collect();
         let tri: TiVec<PanelFace, [PanelVertex; 3]> =
             p.triangles.iter().map(|t| t.map(|i| PanelVertex::from(i as usize))).collect();
-        let f = flatten(&pos, &tri, &FlattenOptions::default()).unwrap();
+        // `FLATTEN='{"pin_tie":0.1}'`: the flattening's options
+        let fo: FlattenOptions =
+            std::env::var("FLATTEN").map(|j| serde_json::from_str(&j).unwrap()).unwrap_or_default();
+        let f = flatten(&pos, &tri, &fo).unwrap();
         let d = distortion(&pos, &tri, &f.uv);
         // per triangle: its 3D centroid, its flat centroid, and its worst edge strain
         let mut dump = String::new();
