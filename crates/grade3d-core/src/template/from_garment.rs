@@ -820,7 +820,8 @@ pub fn author_from_garment(
         }
     }
     interior_nodes(&soup, &bands, &loops, opts, &mut nodes);
-    symmetric_nodes(&soup, &ax, symmetric_tolerance, &listed, &mut nodes);
+    let mirror_index = MirrorIndex::new(&soup, symmetric_tolerance);
+    symmetric_nodes(&soup, &ax, mirror_index.as_ref(), &listed, &mut nodes);
 
     // topology: each band its own component, the nodes locked
     // (a band too narrow for its nodes contracts to a triangle another band
@@ -832,20 +833,12 @@ pub fn author_from_garment(
     let mut stuck_rounds = 0;
     let apex = STUCK_APEX * opts.max_edge_mm * 1e-3;
     // drafted in halves: a node added on one side gets its mirror image too
-    let used_list: Vec<u32> = used.iter().copied().collect();
-    let used_grid = PointGrid::new(
-        &used_list.iter().map(|&v| soup.positions[v as usize]).collect::<Vec<_>>(),
-        symmetric_tolerance.max(f64::MIN_POSITIVE),
-    );
     let mirror_new = |nodes: &mut NodeSet, from: usize| {
-        if !halves {
-            return;
-        }
+        let Some(index) = mirror_index.as_ref().filter(|_| halves) else { return };
         let added: Vec<u32> = nodes.order[from..].to_vec();
         for v in added {
-            let image = used_grid.nearest_within(ax.mirror(soup.positions[v as usize]), symmetric_tolerance);
-            if let Some(i) = image {
-                nodes.add(used_list[i], None);
+            if let Some(w) = index.image(&ax, soup.positions[v as usize]) {
+                nodes.add(w, None);
             }
         }
     };
@@ -1869,16 +1862,40 @@ const MIRROR_NODE_SPACING: f64 = 0.25;
 /// move them within rounding).
 const ON_MIDLINE_M: f64 = 1e-6;
 
+/// The vertices a soup's triangles use, indexed for their mirror images
+/// across the body's mid-sagittal plane.
+struct MirrorIndex {
+    used: Vec<u32>,
+    grid: PointGrid,
+    tolerance: f64,
+}
+
+impl MirrorIndex {
+    /// `None` where `tolerance` (m) is not positive: no image is close enough.
+    fn new(soup: &Soup, tolerance: f64) -> Option<Self> {
+        if tolerance <= 0.0 || tolerance.is_nan() {
+            return None;
+        }
+        let used: Vec<u32> = soup.triangles.iter().flatten().copied().collect::<BTreeSet<u32>>().into_iter().collect();
+        let points: Vec<DVec3> = used.iter().map(|&v| soup.positions[v as usize]).collect();
+        Some(Self { grid: PointGrid::new(&points, tolerance), used, tolerance })
+    }
+
+    /// The used vertex nearest the mirror image of `p`, within the tolerance.
+    fn image(&self, ax: &Axes, p: DVec3) -> Option<u32> {
+        self.grid.nearest_within(ax.mirror(p), self.tolerance).map(|i| self.used[i])
+    }
+
+    /// Whether every used vertex of `soup` (the one indexed) has an image.
+    fn symmetric(&self, soup: &Soup, ax: &Axes) -> bool {
+        self.used.iter().all(|&v| self.image(ax, soup.positions[v as usize]).is_some())
+    }
+}
+
 /// Whether every used vertex of `soup` mirrors onto a used vertex within
 /// `tolerance` (m; 0: never) across the body's mid-sagittal plane.
 fn is_symmetric(soup: &Soup, ax: &Axes, tolerance: f64) -> bool {
-    if tolerance <= 0.0 {
-        return false;
-    }
-    let used: Vec<u32> = soup.triangles.iter().flatten().copied().collect::<BTreeSet<u32>>().into_iter().collect();
-    let points: Vec<DVec3> = used.iter().map(|&v| soup.positions[v as usize]).collect();
-    let grid = PointGrid::new(&points, tolerance);
-    points.iter().all(|&p| grid.nearest_within(ax.mirror(p), tolerance).is_some())
+    MirrorIndex::new(soup, tolerance).is_some_and(|m| m.symmetric(soup, ax))
 }
 
 /// The edges of `soup` along the body's mid-sagittal plane between two
@@ -1978,14 +1995,16 @@ fn mirror_halves(
 /// different nodes: its darts opened 73.7 and 27.3 mm). Ring nodes (tied to
 /// their girth's points, symmetric already), the caller's nodes and nodes
 /// on the plane stay. Returns whether the garment was found symmetric.
-fn symmetric_nodes(soup: &Soup, ax: &Axes, tolerance: f64, listed: &BTreeSet<u32>, nodes: &mut NodeSet) -> bool {
-    if !is_symmetric(soup, ax, tolerance) {
-        return false;
-    }
-    let used: Vec<u32> = soup.triangles.iter().flatten().copied().collect::<BTreeSet<u32>>().into_iter().collect();
-    let points: Vec<DVec3> = used.iter().map(|&v| soup.positions[v as usize]).collect();
-    let grid = PointGrid::new(&points, tolerance);
-    let image = |v: u32| grid.nearest_within(ax.mirror(soup.positions[v as usize]), tolerance).map(|i| used[i]);
+fn symmetric_nodes(
+    soup: &Soup,
+    ax: &Axes,
+    index: Option<&MirrorIndex>,
+    listed: &BTreeSet<u32>,
+    nodes: &mut NodeSet,
+) -> bool {
+    let Some(index) = index.filter(|m| m.symmetric(soup, ax)) else { return false };
+    let tolerance = index.tolerance;
+    let image = |v: u32| index.image(ax, soup.positions[v as usize]);
     let side = |v: u32| (soup.positions[v as usize] - ax.centre).dot(ax.left);
     let free = |v: u32| nodes.ties.get(&v).is_some_and(Option::is_none) && !listed.contains(&v);
     let mut out = NodeSet::default();
