@@ -579,10 +579,15 @@ struct Axes {
 }
 
 impl Axes {
-    /// `p` mirrored across the body's mid-sagittal plane (through `centre`,
-    /// normal `left`).
+    /// Signed distance of `p` from the body's mid-sagittal plane (through
+    /// `centre`, normal `left`), positive on the body's left.
+    fn side(&self, p: DVec3) -> f64 {
+        (p - self.centre).dot(self.left)
+    }
+
+    /// `p` mirrored across the body's mid-sagittal plane.
     fn mirror(&self, p: DVec3) -> DVec3 {
-        p - 2.0 * self.left * (p - self.centre).dot(self.left)
+        p - 2.0 * self.left * self.side(p)
     }
 }
 
@@ -893,12 +898,13 @@ pub fn author_from_garment(
     // the contraction keeps the nodes, not the triangles' shape: its slivers
     // fold the refined garment along their long edges (module docs, step 5)
     lawson_flips(&soup.positions, &mut coarse, &coarse_band, &opts.flips);
+    // pieces that mirror each other (the halves' pieces, the template's mirror pairs)
+    let soup_pairs = mirror_pairs(&soup, &soup.names, &ax, opts.mirror_tolerance_mm * 1e-3);
     // the right half the left's mirror image
     let mirrored = if halves {
-        let pairs = mirror_pairs(&soup, &soup.names, &ax, opts.mirror_tolerance_mm * 1e-3);
         let image_of_panel: Vec<usize> = (0..soup.names.len())
             .map(|p| {
-                pairs
+                soup_pairs
                     .iter()
                     .find_map(|[a, b]| {
                         let (ia, ib) =
@@ -1037,7 +1043,8 @@ pub fn author_from_garment(
             DraftPanel { name: n.clone(), triangles: tris.clone(), grain: pair, quantity: 1 }
         })
         .collect();
-    let mirror_pairs = mirror_pairs(&soup, &kept_names, &ax, opts.mirror_tolerance_mm * 1e-3);
+    let mirror_pairs: Vec<[String; 2]> =
+        soup_pairs.into_iter().filter(|pair| pair.iter().all(|n| kept_names.contains(n))).collect();
 
     // ties
     let ring_tie: BTreeMap<u32, PointId> =
@@ -1902,7 +1909,7 @@ fn is_symmetric(soup: &Soup, ax: &Axes, tolerance: f64) -> bool {
 /// faces of one piece on either side of it (a centre piece's midline after
 /// the midline cut).
 fn midline_edges(soup: &Soup, ax: &Axes) -> BTreeSet<(u32, u32)> {
-    let side = |p: DVec3| (p - ax.centre).dot(ax.left);
+    let side = |p: DVec3| ax.side(p);
     let mut faces: BTreeMap<(u32, u32), Vec<usize>> = BTreeMap::new();
     for (f, t) in soup.triangles.iter().enumerate() {
         for k in 0..3 {
@@ -1941,7 +1948,7 @@ fn mirror_halves(
     coarse: &mut Vec<[u32; 3]>,
     coarse_panel: &mut Vec<usize>,
 ) -> Option<BTreeMap<u32, u32>> {
-    let side = |v: u32| (soup.positions[v as usize] - ax.centre).dot(ax.left);
+    let side = |v: u32| ax.side(soup.positions[v as usize]);
     let (left, right): (Vec<u32>, Vec<u32>) =
         nodes.order.iter().copied().filter(|&v| side(v).abs() > ON_MIDLINE_M).partition(|&v| side(v) > 0.0);
     let nearest = |p: DVec3, among: &[u32]| {
@@ -2005,7 +2012,7 @@ fn symmetric_nodes(
     let Some(index) = index.filter(|m| m.symmetric(soup, ax)) else { return false };
     let tolerance = index.tolerance;
     let image = |v: u32| index.image(ax, soup.positions[v as usize]);
-    let side = |v: u32| (soup.positions[v as usize] - ax.centre).dot(ax.left);
+    let side = |v: u32| ax.side(soup.positions[v as usize]);
     let free = |v: u32| nodes.ties.get(&v).is_some_and(Option::is_none) && !listed.contains(&v);
     let mut out = NodeSet::default();
     for &v in &nodes.order {
@@ -2084,7 +2091,16 @@ fn soup_mesh(soup: &Soup) -> Result<TriMesh, FromGarmentError> {
 /// Bands with a coarse triangle on the same three nodes as another's, or
 /// with an edge used by more than two coarse triangles.
 fn crowded_bands(coarse: &[[u32; 3]], band: &[usize]) -> BTreeSet<usize> {
-    let mut out = BTreeSet::new();
+    crowding(coarse).0.into_iter().map(|f| band[f]).collect()
+}
+
+/// The triangles using each undirected edge `(low, high)`.
+type EdgeUses = BTreeMap<(u32, u32), Vec<usize>>;
+
+/// The coarse triangles that crowd ([`crowded_bands`]: on the same three
+/// nodes as another, or on an edge more than two use), and the triangles
+/// using each edge.
+fn crowding(coarse: &[[u32; 3]]) -> (BTreeSet<usize>, EdgeUses) {
     let mut by_nodes: BTreeMap<[u32; 3], Vec<usize>> = BTreeMap::new();
     let mut by_edge: BTreeMap<(u32, u32), Vec<usize>> = BTreeMap::new();
     for (f, t) in coarse.iter().enumerate() {
@@ -2096,10 +2112,14 @@ fn crowded_bands(coarse: &[[u32; 3]], band: &[usize]) -> BTreeSet<usize> {
             by_edge.entry((a.min(b), a.max(b))).or_default().push(f);
         }
     }
-    for fs in by_nodes.values().filter(|f| f.len() > 1).chain(by_edge.values().filter(|f| f.len() > 2)) {
-        out.extend(fs.iter().map(|&f| band[f]));
-    }
-    out
+    let offending = by_nodes
+        .values()
+        .filter(|f| f.len() > 1)
+        .chain(by_edge.values().filter(|f| f.len() > 2))
+        .flatten()
+        .copied()
+        .collect();
+    (offending, by_edge)
 }
 
 /// Passes of [`flip_crowded`] at most (one flip a pass).
@@ -2119,22 +2139,7 @@ fn flip_crowded(positions: &[DVec3], triangles: &mut [[u32; 3]], band: &[usize])
     };
     let mut flipped = false;
     for _ in 0..CROWDED_FLIP_PASSES {
-        let mut by_nodes: BTreeMap<[u32; 3], usize> = BTreeMap::new();
-        let mut by_edge: BTreeMap<(u32, u32), Vec<usize>> = BTreeMap::new();
-        let mut offending = BTreeSet::new();
-        for (f, t) in triangles.iter().enumerate() {
-            let mut key = *t;
-            key.sort_unstable();
-            if let Some(&g) = by_nodes.get(&key) {
-                offending.extend([f, g]);
-            }
-            by_nodes.insert(key, f);
-            for k in 0..3 {
-                let (a, b) = (t[k], t[(k + 1) % 3]);
-                by_edge.entry((a.min(b), a.max(b))).or_default().push(f);
-            }
-        }
-        offending.extend(by_edge.values().filter(|fs| fs.len() > 2).flatten().copied());
+        let (offending, by_edge) = crowding(triangles);
         let mut changed = false;
         for f in offending {
             let t = triangles[f];
