@@ -10,7 +10,8 @@
 //! and extent differences; `POP=6,15,9s` adds population bodies, `9s` body 9's scan-like copy;
 //! `DECIDE=1` decides the darts on every body instead of carrying the
 //! block's; `AUTO='{"enabled":false}'` overrides the found-dart search's
-//! options; `NODES=1` lists how each node is placed; `TEMPLATE=a-line-skirt`
+//! options; `NODES=1` lists how each node is placed (`DECODE=1` those that
+//! decoding on the design body moves); `TEMPLATE=a-line-skirt`
 //! probes that built-in template on its reference body instead; `LINES=1`
 //! prints each piece's internal lines and their problems.)
 //!
@@ -23,7 +24,8 @@
 //! `dir/strain-<piece>.txt`). `SURFACE=path` writes the drawn OBJ, `FLAT_ONLY=1` stops there;
 //! `REFIT=k` adds nodes where the graded surface strays most, `k` rounds.
 //! Any template: `SVG=dir` writes each grade's pieces, `GRADED=dir` each
-//! graded surface (OBJ), `COARSE=path` the coarse mesh on its design body,
+//! graded surface (OBJ), `COARSE=path` the coarse mesh on its design body (`COARSE_ALL=dir`
+//! on every body; `COARSE_ONLY=1` stops there),
 //! `PANELS=1` flattens every grade's panels freely (as the drawn ones;
 //! with `DUMP=dir` each panel's OBJ too; `FLATTEN='{"pin_tie":0.05}'` sets
 //! that flattening's options), and
@@ -138,6 +140,7 @@ fn main() {
                 }
                 a = author_from_garment("shift-dress", &pieces, &design, &o).unwrap();
             }
+            println!("unmapped {:?}", a.unmapped);
             let _ = SURFACE_OF.set(a.surface.clone());
             a.template
         }
@@ -183,6 +186,42 @@ fn main() {
         let positions = t.nodes.iter().map(|n| glam::DVec3::from_array(n.reference)).collect();
         write_mesh(&path, "coarse", positions, (0..t.faces.len()).map(|f| t.face_nodes(f)).collect());
     }
+    if std::env::var("DECODE").is_ok() {
+        // nodes that decoding on the design body does not put back on their reference
+        let m = grade3d::template::codec::decode(&t, &design, t.defaults.relocation).unwrap();
+        println!("decode: relocation {:?}", t.defaults.relocation);
+        // nodes without a node at their mirror image across the body's left/right points' bisecting plane
+        let pairs: Vec<(glam::DVec3, glam::DVec3)> = design
+            .points
+            .iter()
+            .filter_map(|(id, p)| {
+                let right = id.as_str().contains("left").then(|| id.as_str().replace("left", "right"))?;
+                let q = design.points.iter().find(|(k, _)| k.as_str() == right)?.1;
+                Some((p.position, q.position))
+            })
+            .collect();
+        let plane = grade3d::geom::plane::Plane::bisecting(&pairs, None).unwrap();
+        let refs: Vec<glam::DVec3> = t.nodes.iter().map(|n| glam::DVec3::from_array(n.reference)).collect();
+        for (i, &p) in refs.iter().enumerate() {
+            let m = p - 2.0 * plane.signed_distance(p) * plane.normal;
+            let (j, d) =
+                refs.iter().enumerate().map(|(j, q)| (j, q.distance(m))).min_by(|a, b| a.1.total_cmp(&b.1)).unwrap();
+            if d > 1e-4 {
+                println!(
+                    "decode: node {i} ({}) nearest mirror node {j} ({}) {:.2} mm",
+                    t.nodes[i].point,
+                    t.nodes[j].point,
+                    d * 1e3
+                );
+            }
+        }
+        for (i, (n, p)) in t.nodes.iter().zip(&m.positions).enumerate() {
+            let off = glam::DVec3::from_array(n.reference).distance(*p) * 1e3;
+            if off > 0.1 {
+                println!("decode: node {i} ({}) {off:.2} mm off its reference", n.point);
+            }
+        }
+    }
     if std::env::var("NODES").is_ok() {
         let hip = girth_plane(&design, CurveId::Hip).unwrap();
         for (i, n) in t.nodes.iter().enumerate() {
@@ -203,6 +242,9 @@ fn main() {
                 p.z * 1e3
             );
         }
+    }
+    if std::env::var("COARSE_ONLY").is_ok() {
+        return;
     }
     let mut go = GradeOptions::default();
     if let Ok(l) = std::env::var("LEVELS") {
@@ -301,6 +343,13 @@ fn main() {
                     );
                 }
             }
+        }
+        if let Ok(dir) = std::env::var("COARSE_ALL") {
+            // the coarse mesh decoded on every body
+            let m =
+                grade3d::template::codec::decode(&t, body, grade3d::template::format::Relocation::Eq1Frame).unwrap();
+            let path = format!("{dir}/{}-coarse.obj", name.replace('/', "-"));
+            write_mesh(&path, "coarse", m.positions.clone(), (0..t.faces.len()).map(|f| t.face_nodes(f)).collect());
         }
         let o = obstacle(body);
         let src = if decide { DartSource::Decide } else { DartSource::Block(&plan) };
@@ -456,7 +505,16 @@ fn flat_report(pieces: &[PanelMesh]) {
         // `FLATTEN='{"pin_tie":0.1}'`: the flattening's options
         let fo: FlattenOptions =
             std::env::var("FLATTEN").map(|j| serde_json::from_str(&j).unwrap()).unwrap_or_default();
-        let f = flatten(&pos, &tri, &fo).unwrap();
+        let f = match flatten(&pos, &tri, &fo) {
+            Ok(f) => f,
+            Err(e) => {
+                if let grade3d::pattern::flatten::FlattenError::DegenerateTriangle { face } = e {
+                    println!("  {}: degenerate triangle {face}: {:?}", p.name, tri[face].map(|v| pos[v]));
+                }
+                line += &format!(" {}:{e}", p.name);
+                continue;
+            }
+        };
         let d = distortion(&pos, &tri, &f.uv);
         // per triangle: its 3D centroid, its flat centroid, and its worst edge strain
         let mut dump = String::new();

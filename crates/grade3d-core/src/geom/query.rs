@@ -259,6 +259,22 @@ impl PointGrid {
         }
         best.map(|(_, i)| i)
     }
+
+    /// Every point within `r` of `q` (`r` at most the cell size), with its
+    /// distance, in no particular order.
+    pub fn within(&self, q: DVec3, r: f64) -> Vec<(usize, f64)> {
+        let c = Self::key(q, self.cell);
+        let mut out = Vec::new();
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    let Some(list) = self.cells.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) else { continue };
+                    out.extend(list.iter().map(|&i| (i, self.points[i].distance(q))).filter(|&(_, d)| d <= r));
+                }
+            }
+        }
+        out
+    }
 }
 
 #[cfg(test)]

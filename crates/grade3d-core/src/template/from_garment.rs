@@ -47,7 +47,9 @@
 //!      body);
 //!    * the positions the caller lists (snapped to the nearest vertex);
 //!    * on a garment that is its own mirror image across the body's
-//!      mid-sagittal plane ([`GarmentOptions::symmetric_nodes_mm`]), the free
+//!      mid-sagittal plane (its left/right feature points bisected, as the
+//!      grade symmetrises about it: `refine::symmetry`;
+//!      [`GarmentOptions::symmetric_nodes_mm`]), the free
 //!      nodes on the right replaced by the mirror images of those on the
 //!      left, so that both halves are drafted alike; with
 //!      [`GarmentOptions::mirror_halves`] the garment is first cut along that
@@ -129,7 +131,7 @@ use super::format::{Below, Between, GradingDefaults, Relocation, Template};
 use super::garment_panels::{weld_panels, PanelError, PanelMesh, WeldOptions};
 use super::girth::{bridged, girth_plane, ring_curves, shorter_way, RING_PLANE_TOLERANCE_M};
 use crate::body::feature::FeatureBody;
-use crate::body::vocab::{optional_point, point_def, CurveId, PointId, GIRTH_CURVES, POINTS};
+use crate::body::vocab::{optional_point, point_def, CurveId, PointDef, PointId, GIRTH_CURVES, POINTS};
 use crate::geom::cut::split_by_plane;
 use crate::geom::flip::{flipped_pair, lawson_flips, FlipOptions};
 use crate::geom::mesh::{boundary_loops, TriMesh, VertexId};
@@ -141,6 +143,7 @@ use crate::geom::slice::slice;
 use crate::geom::topology::UnionFind;
 use crate::mannequin::fit::{fit_size, FitOptions};
 use crate::mannequin::size_chart::{Sex, SizeRow};
+use crate::refine::symmetry::body_plane;
 
 /// How a piece that is not a disc is cut (method, step 2).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -600,7 +603,15 @@ fn axes(body: &FeatureBody) -> Result<Axes, FromGarmentError> {
     let neck = point(PointId::NeckBack)?;
     let up = if plane.normal.dot(neck - centre) >= 0.0 { plane.normal } else { -plane.normal };
     let side = point(PointId::HipLeft)? - point(PointId::HipRight)?;
-    let left = (side - up * side.dot(up)).normalize_or_zero();
+    // the mid-sagittal plane the grade symmetrises about (`refine::symmetry`): every left/right
+    // pair of feature points bisected, so that the halves drafted here mirror there exactly
+    // (drafted across the plane through the hip's vertex centroid, the dress's shoulder nodes
+    // mirrored 2.8 mm apart across it); made horizontal, through the hip's centroid projected
+    let (across, centre) = match body_plane(body) {
+        Some(((n, d), _)) => (if n.dot(side) >= 0.0 { n } else { -n }, centre - n * (n.dot(centre) - d)),
+        None => (side, centre),
+    };
+    let left = (across - up * across.dot(up)).normalize_or_zero();
     if left == DVec3::ZERO {
         return Err(FromGarmentError::Body("hip_left apart from hip_right".into()));
     }
@@ -2465,14 +2476,21 @@ fn lofted(
     ax: &Axes,
     (arms, index): (&[(Plane, f64)], &SphereIndex),
 ) -> Vec<Between> {
-    // the torso girths with a walk and a start point (the one furthest front), bottom to top
+    // the torso girths with a walk and a start point, bottom to top: the one furthest front of
+    // its midline points (neither left nor right) where it has one, so that a node and its
+    // mirror image are placed from one start (from `bust_left`, the bust apex furthest front to
+    // rounding, the two sides of the dress's underbust moved apart by 5 mm on another body)
     let mut girths: Vec<(CurveId, GirthWalk, PointId, f64)> = TORSO
         .iter()
         .filter_map(|&c| {
             let w = GirthWalk::new(body, c)?;
+            let on = |d: &&PointDef| d.f1 == c || d.f2 == c;
+            let midline = |d: &&PointDef| !d.id.as_str().contains("left") && !d.id.as_str().contains("right");
+            let any_midline = POINTS.iter().filter(on).filter(midline).any(|d| body.points.contains_key(&d.id));
             let start = POINTS
                 .iter()
-                .filter(|d| d.f1 == c || d.f2 == c)
+                .filter(on)
+                .filter(|d| !any_midline || midline(d))
                 .filter_map(|d| Some((d.id, body.points.get(&d.id)?.position)))
                 .max_by(|a, b| (a.1 - w.centroid).dot(ax.front).total_cmp(&(b.1 - w.centroid).dot(ax.front)))?;
             let s0 = w.start(start.1)?;
