@@ -79,8 +79,10 @@ const ON_PLANE_M: f64 = 1e-7;
 
 /// How far a vertex's mirror partner may lie from its mirror image in
 /// [`drape_above`] (m): the sampled surface mirrors within 2.7 mm on the
-/// reference body (38 of its 4514 vertices beyond 0.1 mm), its vertices
-/// are 10 mm apart and more.
+/// reference body (38 of its 4514 vertices beyond 0.1 mm). Its vertices
+/// are mostly 3–10 mm apart, but the shoulder seams crowd to 1.4 mm, so
+/// partners are matched greedily from the closest ([`mirror_partners`]),
+/// not by nearest image alone.
 const MIRROR_PARTNER_M: f64 = 5e-3;
 
 /// How far the body's left/right feature points may be from mirroring for
