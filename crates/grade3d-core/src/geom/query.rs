@@ -281,6 +281,25 @@ impl PointGrid {
 mod tests {
     use super::*;
 
+    /// `PointGrid::within` against a brute-force search: a 10 × 10 × 10
+    /// lattice 1 mm apart, queries off the lattice, radius up to the cell.
+    #[test]
+    fn point_grid_within_finds_what_brute_force_finds() {
+        let points: Vec<DVec3> = (0..1000)
+            .map(|i| DVec3::new(f64::from(i % 10), f64::from(i / 10 % 10), f64::from(i / 100)) * 1e-3)
+            .collect();
+        let grid = PointGrid::new(&points, 2e-3);
+        for (q, r) in [(DVec3::splat(4.3e-3), 2e-3), (DVec3::new(0.2e-3, 9.1e-3, 5.5e-3), 1.5e-3), (DVec3::ZERO, 1e-3)]
+        {
+            let mut got: Vec<usize> = grid.within(q, r).into_iter().map(|(i, _)| i).collect();
+            got.sort_unstable();
+            let want: Vec<usize> = (0..points.len()).filter(|&i| points[i].distance(q) <= r).collect();
+            assert_eq!(got, want, "{q} {r}");
+        }
+        // the lattice point and its six neighbours 1 mm away
+        assert_eq!(grid.within(DVec3::splat(5e-3), 1e-3 + 1e-12).len(), 7);
+    }
+
     #[test]
     fn closest_on_triangle_regions() {
         let (a, b, c) = (DVec3::ZERO, DVec3::X, DVec3::Y);

@@ -1155,4 +1155,20 @@ mod tests {
             }
         }
     }
+
+    /// `mirror_partners` pairs every point of a crowded cluster, where
+    /// mutual nearest images leave two out. Planted: across x = 0, left
+    /// points a (x = 1.000) and b (1.0014), right points c (−1.0010) and d
+    /// (−1.0030). Nearest images: a → c, b → c, c → b, d → b, so only b–c
+    /// is mutual; greedy matching from the closest pairs b–c (0.4 mm), then
+    /// a–d (3 mm). A point on the plane is its own partner; one with no
+    /// image within the tolerance has none.
+    #[test]
+    fn mirror_partners_pair_a_crowded_cluster() {
+        let at = |x: f64| DVec3::new(x, 0.0, 0.0);
+        let points = [at(1.0), at(1.0014), at(-1.0010), at(-1.0030), DVec3::new(0.0, 1.0, 0.0), at(2.0)];
+        let mirror = |p: DVec3| DVec3::new(-p.x, p.y, p.z);
+        let partner = mirror_partners(&points, mirror, 5e-3);
+        assert_eq!(partner, [Some(3), Some(2), Some(1), Some(0), Some(4), None]);
+    }
 }
