@@ -190,20 +190,11 @@ fn main() {
         // nodes that decoding on the design body does not put back on their reference
         let m = grade3d::template::codec::decode(&t, &design, t.defaults.relocation).unwrap();
         println!("decode: relocation {:?}", t.defaults.relocation);
-        // nodes without a node at their mirror image across the body's left/right points' bisecting plane
-        let pairs: Vec<(glam::DVec3, glam::DVec3)> = design
-            .points
-            .iter()
-            .filter_map(|(id, p)| {
-                let right = id.as_str().contains("left").then(|| id.as_str().replace("left", "right"))?;
-                let q = design.points.iter().find(|(k, _)| k.as_str() == right)?.1;
-                Some((p.position, q.position))
-            })
-            .collect();
-        let plane = grade3d::geom::plane::Plane::bisecting(&pairs, None).unwrap();
+        // nodes without a node at their mirror image across the body's mid-sagittal plane
+        let ((n, d), _) = grade3d::refine::symmetry::body_plane(&design).unwrap();
         let refs: Vec<glam::DVec3> = t.nodes.iter().map(|n| glam::DVec3::from_array(n.reference)).collect();
         for (i, &p) in refs.iter().enumerate() {
-            let m = p - 2.0 * plane.signed_distance(p) * plane.normal;
+            let m = p - 2.0 * (n.dot(p) - d) * n;
             let (j, d) =
                 refs.iter().enumerate().map(|(j, q)| (j, q.distance(m))).min_by(|a, b| a.1.total_cmp(&b.1)).unwrap();
             if d > 1e-4 {

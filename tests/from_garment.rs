@@ -794,17 +794,9 @@ fn a_symmetric_dress_drafted_in_halves_with_its_girth_lines_split() {
     // plane through the hip's vertex centroid instead, the shoulder nodes mirrored 2.8 mm apart
     // across this one, the grade paired the refined halves by nearest vertices only, and the
     // found darts of a side piece were not mirrored onto its pair
-    let pairs: Vec<(glam::DVec3, glam::DVec3)> = body
-        .points
-        .iter()
-        .filter_map(|(id, p)| {
-            let right = id.as_str().contains("left").then(|| id.as_str().replace("left", "right"))?;
-            Some((p.position, body.points.iter().find(|(k, _)| k.as_str() == right)?.1.position))
-        })
-        .collect();
-    let plane = grade3d::geom::plane::Plane::bisecting(&pairs, None).unwrap();
-    let mirror = |p: glam::DVec3| p - 2.0 * plane.normal * plane.signed_distance(p);
-    let side = |p: glam::DVec3| plane.signed_distance(p);
+    let ((n, d), _) = grade3d::refine::symmetry::body_plane(&body).unwrap();
+    let side = |p: glam::DVec3| n.dot(p) - d;
+    let mirror = |p: glam::DVec3| p - 2.0 * n * side(p);
     let positions: Vec<glam::DVec3> = t.nodes.iter().map(|n| glam::DVec3::from_array(n.reference)).collect();
     let mut worst_mm: f64 = 0.0;
     for &p in positions.iter().filter(|p| side(**p).abs() > 1e-6) {

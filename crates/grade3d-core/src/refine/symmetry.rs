@@ -98,7 +98,7 @@ impl Default for SymmetryOptions {
 
 /// The body's mid-sagittal plane `(n, d)` and how far its left/right feature
 /// points are from mirroring, m; `None` without such pairs.
-pub(crate) fn body_plane(body: &FeatureBody) -> Option<((DVec3, f64), f64)> {
+pub fn body_plane(body: &FeatureBody) -> Option<((DVec3, f64), f64)> {
     let mut pairs = Vec::new();
     for (id, p) in &body.points {
         let name = id.as_str();

@@ -714,10 +714,7 @@ pub fn shift_dress_curves(body: &FeatureBody, o: &ShiftDressOptions) -> Result<V
 /// nearest it (module docs). A point is moved by its position alone, so
 /// the two sides of a seam stay together.
 pub fn hold_off(pieces: &mut [PanelMesh], body: &FeatureBody, clearance: f64) {
-    let form = Form::new(body);
-    for p in pieces.iter_mut().flat_map(|piece| piece.positions.iter_mut()) {
-        *p = form.held_off(*p, clearance);
-    }
+    Form::new(body).hold_off(pieces, clearance);
 }
 
 /// The body as a dress form: its nearest-point index and winding tree.
@@ -733,6 +730,13 @@ impl<'a> Form<'a> {
             body,
             index: SphereIndex::new(&body.mesh),
             tree: WindingTree::new(&body.mesh, &WindingOptions::default()),
+        }
+    }
+
+    /// [`hold_off`] on this form.
+    fn hold_off(&self, pieces: &mut [PanelMesh], clearance: f64) {
+        for p in pieces.iter_mut().flat_map(|piece| piece.positions.iter_mut()) {
+            *p = self.held_off(*p, clearance);
         }
     }
 
@@ -787,13 +791,7 @@ fn mirror_partners(points: &[DVec3], mirror: impl Fn(DVec3) -> DVec3, tol: f64) 
 /// garment is made symmetric, first and after each round: a vertex and
 /// its mirror partner are averaged across the body's mid-sagittal plane
 /// (a vertex on the plane is its own partner).
-fn drape_above(
-    pieces: &mut [PanelMesh],
-    body: &FeatureBody,
-    above: &Plane,
-    (iterations, ramp): (usize, f64),
-    clearance: f64,
-) {
+fn drape_above(pieces: &mut [PanelMesh], form: &Form, above: &Plane, (iterations, ramp): (usize, f64), clearance: f64) {
     if iterations == 0 {
         return;
     }
@@ -831,25 +829,28 @@ fn drape_above(
     for (f, p) in fixed.iter_mut().zip(&welded) {
         *f |= above.signed_distance(*p) <= ON_PLANE_M;
     }
-    // on a mirror-symmetric body each vertex's mirror partner (within [`MIRROR_PARTNER_M`]): the surface is made symmetric first (as sampled and held off, it
-    // mirrors only within 2.7 mm on the reference body), and again after each round (the
-    // umbrella operator follows the sampled triangles' diagonals, which do not mirror)
-    let mirror = body_plane(body)
-        .filter(|&(_, worst)| worst <= SYMMETRIC_BODY_M)
-        .map(|((n, d), _)| move |p: DVec3| p - 2.0 * (n.dot(p) - d) * n);
-    let partner = match mirror {
-        Some(m) => mirror_partners(&welded, m, MIRROR_PARTNER_M),
+    // on a mirror-symmetric body each vertex's mirror partner (within [`MIRROR_PARTNER_M`]): the
+    // surface is made symmetric first (as sampled and held off, it mirrors only within 2.7 mm on
+    // the reference body), and again after each round (the umbrella operator follows the sampled
+    // triangles' diagonals, which do not mirror); elsewhere no vertex has a partner
+    let plane = body_plane(form.body).filter(|&(_, worst)| worst <= SYMMETRIC_BODY_M).map(|(plane, _)| plane);
+    let reflect = move |p: DVec3| plane.map_or(p, |(n, d)| p - 2.0 * (n.dot(p) - d) * n);
+    let partner = match plane {
+        Some(_) => mirror_partners(&welded, reflect, MIRROR_PARTNER_M),
         None => vec![None; n],
     };
-    if let Some(m) = mirror {
-        let before = welded.clone();
-        for (i, p) in welded.iter_mut().enumerate() {
-            if let Some(j) = partner[i] {
-                *p = 0.5 * (before[i] + m(before[j]));
-            }
+    // `to[i]`: `from[i]` averaged with its partner's mirror image where it has one and `moves(i)`
+    let symmetric = |from: &[DVec3], to: &mut [DVec3], moves: &dyn Fn(usize) -> bool| {
+        for (i, q) in to.iter_mut().enumerate() {
+            *q = match partner[i] {
+                Some(j) if moves(i) => 0.5 * (from[i] + reflect(from[j])),
+                _ => from[i],
+            };
         }
-    }
-    let form = Form::new(body);
+    };
+    let sampled = welded.clone();
+    symmetric(&sampled, &mut welded, &|_| true);
+    let free = |i: usize| !fixed[i];
     let rest = welded.clone();
     let mut next = welded.clone();
     for _ in 0..iterations {
@@ -860,17 +861,8 @@ fn drape_above(
             let mean = neighbours[i].iter().map(|&j| welded[j as usize]).sum::<DVec3>() / neighbours[i].len() as f64;
             *q = form.held_off(welded[i] + (mean - welded[i]) * DRAPE_STEP, clearance);
         }
-        if let Some(m) = mirror {
-            for (i, p) in welded.iter_mut().enumerate() {
-                *p = match partner[i] {
-                    Some(j) if !fixed[i] => 0.5 * (next[i] + m(next[j])),
-                    _ => next[i],
-                };
-            }
-            next.copy_from_slice(&welded);
-        } else {
-            welded.copy_from_slice(&next);
-        }
+        symmetric(&next, &mut welded, &free);
+        next.copy_from_slice(&welded);
     }
     // the drape faded in over `ramp` above the plane (smoothstep), so that the lines crossing
     // the plane do not kink there
@@ -883,12 +875,7 @@ fn drape_above(
             form.held_off(rest[i] + (welded[i] - rest[i]) * w, clearance)
         };
     }
-    for (i, p) in welded.iter_mut().enumerate() {
-        *p = match (mirror, partner[i]) {
-            (Some(m), Some(j)) if !fixed[i] => 0.5 * (next[i] + m(next[j])),
-            _ => next[i],
-        };
-    }
+    symmetric(&next, &mut welded, &free);
     for (p, &w) in pieces.iter_mut().flat_map(|piece| piece.positions.iter_mut()).zip(&remap) {
         *p = welded[w as usize];
     }
@@ -902,7 +889,9 @@ fn drape_above(
 /// [`shift_dress_curves`]'s; [`AuthorError::Curves`].
 pub fn shift_dress_surface(body: &FeatureBody, o: &ShiftDressOptions) -> Result<Vec<PanelMesh>, AuthorError> {
     let mut pieces = panels_from_curves(&shift_dress_curves(body, o)?, &o.curves)?;
-    hold_off(&mut pieces, body, o.clearance_mm * MM);
+    // one form for holding off and draping (its index and winding tree built once)
+    let form = Form::new(body);
+    form.hold_off(&mut pieces, o.clearance_mm * MM);
     // the shoulders draped from the eased bust line up (the chest line is not a declared ease:
     // held, its corners with the armholes fold)
     let d = Drawing::new(body)?;
@@ -910,7 +899,7 @@ pub fn shift_dress_surface(body: &FeatureBody, o: &ShiftDressOptions) -> Result<
     let plane = girth::girth_plane(body, CurveId::Bust).ok_or_else(|| missing("bust"))?;
     let normal = if plane.normal.dot(d.up) >= 0.0 { plane.normal } else { -plane.normal };
     let above = Plane::from_point_normal(bust.centre, normal).ok_or_else(|| missing("bust"))?;
-    drape_above(&mut pieces, body, &above, (o.drape_iterations, o.drape_ramp_mm * MM), o.clearance_mm * MM);
+    drape_above(&mut pieces, &form, &above, (o.drape_iterations, o.drape_ramp_mm * MM), o.clearance_mm * MM);
     Ok(pieces)
 }
 
