@@ -35,8 +35,8 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use super::format::{
-    Below, Between, Dart, Drop, Edge, Face, GradingDefaults, GrainLine, Hang, Node, Notch, OnCurve, Panel, Relocation,
-    Seam, Template, TemplateError, SCHEMA_ID, SCHEMA_VERSION,
+    Below, Between, Bracket, Dart, Drop, Edge, Face, GradingDefaults, GrainLine, Hang, Node, Notch, OnCurve, Panel,
+    Relocation, Seam, Template, TemplateError, SCHEMA_ID, SCHEMA_VERSION,
 };
 use super::girth::{eased, eased_arc, girth_plane, place_ring_nodes, refit_rings, shorter_way};
 use super::profile::{Profile, ProfileError};
@@ -446,6 +446,36 @@ impl GirthWalk {
     pub fn at(&self, s0: f64, f: f64) -> DVec3 {
         self.loop_.point_at_with(&self.cum, (s0 + f * self.length).rem_euclid(self.length))
     }
+
+    /// The point at the fraction `t` of the arc from parameter `s_from` to
+    /// `s_to`, walked in the loop's direction ([`Bracket`]).
+    pub fn at_bracket(&self, s_from: f64, s_to: f64, t: f64) -> DVec3 {
+        let arc = (s_to - s_from).rem_euclid(self.length);
+        self.loop_.point_at_with(&self.cum, (s_from + t * arc).rem_euclid(self.length))
+    }
+
+    /// The fraction of the arc from `s_from` to `s_to` (walked in the
+    /// loop's direction) at which parameter `s` lies: the inverse of
+    /// [`Self::at_bracket`]; `None` where `s` lies outside that arc.
+    pub fn bracket_fraction(&self, s_from: f64, s_to: f64, s: f64) -> Option<f64> {
+        let arc = (s_to - s_from).rem_euclid(self.length);
+        let along = (s - s_from).rem_euclid(self.length);
+        (arc > 0.0 && along <= arc).then(|| along / arc)
+    }
+}
+
+/// The lofted point of a [`Between`] placement (formula there) from its
+/// girth points `a`, `b` and the girths' centroids; `None` when the
+/// centroids coincide.
+pub fn loft((a, c_a): (DVec3, DVec3), (b, c_b): (DVec3, DVec3), height: f64, radial: f64) -> Option<DVec3> {
+    let q = a + (b - a) * height;
+    let c = c_a + (c_b - c_a) * height;
+    let e = (c_b - c_a).normalize_or_zero();
+    if e == DVec3::ZERO {
+        return None;
+    }
+    let d = (q - c) - e * (q - c).dot(e);
+    Some(q + d.normalize_or_zero() * radial)
 }
 
 /// Where a [`Between`] placement lands (formula there): the lofted point at
@@ -459,14 +489,7 @@ pub fn between_point(
     radial: f64,
 ) -> Option<DVec3> {
     let (a, b) = (lower.at(s_lower, fraction), upper.at(s_upper, fraction));
-    let q = a + (b - a) * height;
-    let c = lower.centroid + (upper.centroid - lower.centroid) * height;
-    let e = (upper.centroid - lower.centroid).normalize_or_zero();
-    if e == DVec3::ZERO {
-        return None;
-    }
-    let d = (q - c) - e * (q - c).dot(e);
-    Some(q + d.normalize_or_zero() * radial)
+    loft((a, lower.centroid), (b, upper.centroid), height, radial)
 }
 
 /// Places each node lofted between two girths ([`Between`]; formula
@@ -480,15 +503,22 @@ pub fn between_nodes(placements: &[Between], body: &FeatureBody, positions: &mut
         walks.entry(b).or_insert_with(|| GirthWalk::new(body, b));
     }
     let mut placed = Vec::new();
+    let point = |id: PointId| body.points.get(&id).map(|q| q.position);
+    // a girth's point: in its bracket where the placement has one, else at the fraction of the
+    // whole girth from its start
+    let girth_point = |w: &GirthWalk, start: PointId, bracket: Option<Bracket>, fraction: f64| match bracket {
+        Some(k) => Some(w.at_bracket(w.start(point(k.from)?)?, w.start(point(k.to)?)?, k.fraction)),
+        None => Some(w.at(w.start(point(start)?)?, fraction)),
+    };
     for b in placements {
-        let point = |id: PointId| body.points.get(&id).map(|q| q.position);
         let (Some(Some(lw)), Some(Some(uw))) = (walks.get(&b.lower), walks.get(&b.upper)) else { continue };
-        let (Some(ls), Some(us)) =
-            (point(b.lower_start).and_then(|p| lw.start(p)), point(b.upper_start).and_then(|p| uw.start(p)))
-        else {
+        let (Some(a), Some(u)) = (
+            girth_point(lw, b.lower_start, b.lower_bracket, b.fraction),
+            girth_point(uw, b.upper_start, b.upper_bracket, b.fraction),
+        ) else {
             continue;
         };
-        let Some(p) = between_point((lw, ls), (uw, us), b.fraction, b.height, b.radial_m) else { continue };
+        let Some(p) = loft((a, lw.centroid), (u, uw.centroid), b.height, b.radial_m) else { continue };
         if let Some(slot) = positions.get_mut(b.node as usize) {
             *slot = p;
             placed.push(b.node);

@@ -331,6 +331,41 @@ pub struct Between {
     pub height: f64,
     /// Outward offset from the lofted girths, m.
     pub radial_m: f64,
+    /// Where the lower girth's point `a` lies between two of that girth's
+    /// feature points; when given, it replaces `a = A(s_A + f·L_A)`
+    /// ([`Bracket`]). Absent in templates authored before it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lower_bracket: Option<Bracket>,
+    /// Where the upper girth's point `b` lies between two of its feature
+    /// points, as [`Self::lower_bracket`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub upper_bracket: Option<Bracket>,
+}
+
+/// A point of a girth placed between two of its feature points (issue #18:
+/// a lofted node follows the feature points on either side of it, as a
+/// spaced ring node does, not the arc fraction of the whole girth from its
+/// midline start, which parts from the ring nodes on a body whose girths
+/// differ in shape — 17–23 mm on a figure with a belly, measured). With
+/// `s_from`, `s_to` the arc parameters of the loop points nearest the two
+/// feature points, walked in the girth's direction (the vocabulary orients
+/// every girth alike), and `L` its length:
+///
+/// ```text
+/// x = A(s_from + t·((s_to − s_from) mod L))
+/// ```
+///
+/// `t` [`Bracket::fraction`]. Continuous as a node moves past a feature
+/// point (`t = 1` of one bracket is `t = 0` of the next).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Bracket {
+    /// The feature point the walk starts at.
+    pub from: PointId,
+    /// The next feature point along the girth's direction.
+    pub to: PointId,
+    /// Fraction of the arc from `from` to `to`, in `[0, 1]`.
+    pub fraction: f64,
 }
 
 /// Which relocation equation a decode uses.
@@ -775,6 +810,14 @@ impl Template {
             }
             if b.lower == b.upper {
                 return Err(bad("needs two distinct girths"));
+            }
+            for k in [b.lower_bracket, b.upper_bracket].into_iter().flatten() {
+                if !(k.fraction.is_finite() && (0.0..=1.0).contains(&k.fraction)) {
+                    return Err(bad("a bracket's fraction must lie in [0, 1]"));
+                }
+                if k.from == k.to {
+                    return Err(bad("a bracket needs two distinct feature points"));
+                }
             }
         }
         for b in &self.below {

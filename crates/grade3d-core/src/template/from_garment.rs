@@ -131,7 +131,7 @@ use serde::{Deserialize, Serialize};
 
 use super::codec::{between_point, drop_axis, leg_length, GirthWalk};
 use super::codec::{decode, encode, CodecError, Draft, DraftPanel, DraftSeam};
-use super::format::{Below, Between, GradingDefaults, Relocation, Template};
+use super::format::{Below, Between, Bracket, GradingDefaults, Relocation, Template};
 use super::garment_panels::{weld_panels, PanelError, PanelMesh, WeldOptions};
 use super::girth::{bridged, girth_plane, ring_curves, shorter_way, RING_PLANE_TOLERANCE_M};
 use crate::body::feature::FeatureBody;
@@ -271,6 +271,15 @@ pub struct GarmentOptions {
     /// false: the body's vertical, as for a piece without them (a texture
     /// atlas is not a pattern layout). Default true.
     pub grain_from_uv: bool,
+    /// Place each lofted node's girth points between the feature points of
+    /// each girth on either side of them ([`super::format::Bracket`]), as
+    /// spaced ring nodes sit between their neighbours; false: at the arc
+    /// fraction of the whole girth from its midline start, which parts
+    /// from the ring nodes where a body's girths differ in shape from the
+    /// design body's (a princess seam's lofted nodes 17–23 mm outside its
+    /// bust ring node on a figure with a belly, and its sew line crossing
+    /// itself). Default false.
+    pub bracketed_lofts: bool,
 }
 
 impl Default for GarmentOptions {
@@ -298,6 +307,7 @@ impl Default for GarmentOptions {
             one_node_a_corner: false,
             ease_at: Vec::new(),
             grain_from_uv: true,
+            bracketed_lofts: false,
         }
     }
 }
@@ -1134,7 +1144,7 @@ pub fn author_from_garment(
     let ring_set: BTreeSet<u32> = ring_tie.keys().copied().collect();
     let below = hanging(&positions, &ring_set, &surface, body, &rings);
     let hung: BTreeSet<u32> = below.iter().map(|b| b.node).collect();
-    let between = lofted(&positions, &ring_set, &hung, body, &ax, (&arms, &body_index));
+    let between = lofted(&positions, &ring_set, &hung, body, &ax, (&arms, &body_index), opts.bracketed_lofts);
     let draft = Draft {
         name: name.to_owned(),
         version: 1,
@@ -2517,16 +2527,23 @@ fn lofted(
     body: &FeatureBody,
     ax: &Axes,
     (arms, index): (&[(Plane, f64)], &SphereIndex),
+    bracketed: bool,
 ) -> Vec<Between> {
     // the torso girths with a walk and a start point, bottom to top: the one furthest front of
     // its midline points (neither left nor right) where it has one, so that a node and its
     // mirror image are placed from one start (from `bust_left`, the bust apex furthest front to
     // rounding, the two sides of the dress's underbust moved apart by 5 mm on another body)
-    let mut girths: Vec<(CurveId, GirthWalk, PointId, f64)> = TORSO
+    let mut girths: Vec<(CurveId, GirthWalk, PointId, f64, Vec<(PointId, f64)>)> = TORSO
         .iter()
         .filter_map(|&c| {
             let w = GirthWalk::new(body, c)?;
             let on = |d: &&PointDef| d.f1 == c || d.f2 == c;
+            // the girth's feature points by their arc parameters, for brackets
+            let params: Vec<(PointId, f64)> = POINTS
+                .iter()
+                .filter(on)
+                .filter_map(|d| Some((d.id, w.start(body.points.get(&d.id)?.position)?)))
+                .collect();
             let midline = |d: &&PointDef| !d.id.as_str().contains("left") && !d.id.as_str().contains("right");
             let any_midline = POINTS.iter().filter(on).filter(midline).any(|d| body.points.contains_key(&d.id));
             let start = POINTS
@@ -2536,7 +2553,7 @@ fn lofted(
                 .filter_map(|d| Some((d.id, body.points.get(&d.id)?.position)))
                 .max_by(|a, b| (a.1 - w.centroid).dot(ax.front).total_cmp(&(b.1 - w.centroid).dot(ax.front)))?;
             let s0 = w.start(start.1)?;
-            Some((c, w, start.0, s0))
+            Some((c, w, start.0, s0, params))
         })
         .collect();
     girths.sort_by(|a, b| a.1.centroid.dot(ax.up).total_cmp(&b.1.centroid.dot(ax.up)));
@@ -2560,10 +2577,31 @@ fn lofted(
         let (lower, upper) = (&girths[k], &girths[k + 1]);
         if let Some(b) = solve_between(p, (lower.0, &lower.1, lower.2, lower.3), (upper.0, &upper.1, upper.2, upper.3))
         {
-            out.push(Between { node, ..b });
+            let (lower_bracket, upper_bracket) = if bracketed {
+                (bracket(&lower.1, &lower.4, lower.3, b.fraction), bracket(&upper.1, &upper.4, upper.3, b.fraction))
+            } else {
+                (None, None)
+            };
+            out.push(Between { node, lower_bracket, upper_bracket, ..b });
         }
     }
     out
+}
+
+/// The [`Bracket`] of the point at the fraction `f` of girth `w` from
+/// parameter `s0`: the girth's feature point at or before it and the next
+/// one after that, in the girth's direction (`points`: ids and arc
+/// parameters). `None` where the girth has fewer than two feature points
+/// apart.
+fn bracket(w: &GirthWalk, points: &[(PointId, f64)], s0: f64, f: f64) -> Option<Bracket> {
+    let s = (s0 + f * w.length).rem_euclid(w.length);
+    let ahead = |from: f64, to: f64| (to - from).rem_euclid(w.length);
+    let &(from, s_from) = points.iter().min_by(|a, b| ahead(a.1, s).total_cmp(&ahead(b.1, s)))?;
+    let &(to, s_to) = points
+        .iter()
+        .filter(|q| ahead(s_from, q.1) > 0.0)
+        .min_by(|a, b| ahead(s_from, a.1).total_cmp(&ahead(s_from, b.1)))?;
+    Some(Bracket { from, to, fraction: w.bracket_fraction(s_from, s_to, s)?.clamp(0.0, 1.0) })
 }
 
 /// Solves a [`Between`] placement reproducing `p` (node 0; the caller sets it).
@@ -2637,6 +2675,8 @@ fn solve_between(
         fraction: f.clamp(0.0, 1.0),
         height: h,
         radial_m: r,
+        lower_bracket: None,
+        upper_bracket: None,
     })
 }
 
