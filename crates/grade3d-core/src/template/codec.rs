@@ -432,7 +432,11 @@ impl GirthWalk {
     /// The body's girth `curve` bridged; `None` where it lacks it.
     pub fn new(body: &FeatureBody, curve: CurveId) -> Option<Self> {
         let plane = girth_plane(body, curve)?;
-        let loop_ = super::girth::bridged(&body.curves.get(&curve)?.polyline, &plane);
+        Self::from_loop(super::girth::bridged(&body.curves.get(&curve)?.polyline, &plane))
+    }
+
+    /// A walk along `loop_` as it is; `None` where it has no length.
+    pub fn from_loop(loop_: Polyline) -> Option<Self> {
         let length = loop_.length();
         (length > f64::EPSILON).then(|| Self { cum: loop_.cumulative(), centroid: loop_.centroid(), length, loop_ })
     }
@@ -758,6 +762,45 @@ mod tests {
             })
             .collect();
         Polyline::new(pts, true)
+    }
+
+    #[test]
+    fn a_bracketed_girth_point_follows_its_two_feature_points() {
+        // a circle of radius 0.1 m, and the same circle with its +x half stretched to 0.15 m
+        let ring = |stretch: f64| {
+            let pts = (0..360)
+                .map(|k| {
+                    let a = (k as f64).to_radians();
+                    let x = 0.1 * a.cos();
+                    DVec3::new(if x > 0.0 { x * stretch } else { x }, 0.0, 0.1 * a.sin())
+                })
+                .collect();
+            GirthWalk::from_loop(Polyline::new(pts, true)).unwrap()
+        };
+        let (round, stretched) = (ring(1.0), ring(1.5));
+        // feature points at 100° and 200° (on the −x half, which the stretch leaves alone), and a
+        // point two fifths of the way from one to the other (140°)
+        let at = |deg: f64| DVec3::new(0.1 * deg.to_radians().cos(), 0.0, 0.1 * deg.to_radians().sin());
+        let planted = at(140.0);
+        for w in [&round, &stretched] {
+            let (s_from, s_to) = (w.start(at(100.0)).unwrap(), w.start(at(200.0)).unwrap());
+            let p = w.at_bracket(s_from, s_to, 0.4);
+            assert!(p.distance(planted) < 1e-4, "bracketed: {p} for {planted}");
+            // the inverse, exact to rounding
+            let t = w.bracket_fraction(s_from, s_to, w.start(p).unwrap()).unwrap();
+            assert!((t - 0.4).abs() < 1e-9, "{t}");
+            // outside the bracket: none
+            assert!(w.bracket_fraction(s_from, s_to, w.start(at(300.0)).unwrap()).is_none());
+        }
+        // the whole girth's fraction from the 100° point parts from the planted point where the
+        // other half grows: what the bracket is for
+        let s0 = round.start(at(100.0)).unwrap();
+        let f = (round.start(planted).unwrap() - s0).rem_euclid(round.length) / round.length;
+        let moved = stretched.at(stretched.start(at(100.0)).unwrap(), f);
+        assert!(moved.distance(planted) > 5e-3, "whole-girth fraction: {moved}");
+        // a bracket across the loop's seam (from 300° through 0° to 60°) walks forward
+        let (s_from, s_to) = (round.start(at(300.0)).unwrap(), round.start(at(60.0)).unwrap());
+        assert!(round.at_bracket(s_from, s_to, 0.5).distance(at(0.0)) < 1e-4);
     }
 
     #[test]
