@@ -221,6 +221,8 @@ fn main() {
                 "below"
             } else if t.between.iter().any(|b| b.node == i) {
                 "between"
+            } else if t.on_curve.iter().any(|b| b.node == i) {
+                "on_curve"
             } else {
                 "eq1"
             };

@@ -392,6 +392,16 @@ pub fn on_curve_point(
     Some((s, eased(loop_, s, radial, plane)))
 }
 
+/// The normal `ν` of an [`OnCurve`] placement (formula there): `plane`'s
+/// normal turned away from `via`, seen from the curve's centroid.
+pub fn turned_normal(plane: &Plane, centroid: DVec3, via: DVec3) -> DVec3 {
+    if plane.normal.dot(via - centroid) > 0.0 {
+        -plane.normal
+    } else {
+        plane.normal
+    }
+}
+
 /// Places each [`OnCurve`] node on the body's curve. Returns the nodes
 /// placed with their curve parameters; one whose curve or points the body
 /// lacks keeps its position.
@@ -408,7 +418,7 @@ pub fn on_curve_nodes(placements: &[OnCurve], body: &FeatureBody, positions: &mu
             continue;
         };
         if let Some(slot) = positions.get_mut(c.node as usize) {
-            *slot = p;
+            *slot = p + turned_normal(&plane, curve.polyline.centroid(), via) * c.normal_m;
             placed.push((c.node, s));
         }
     }
@@ -589,7 +599,8 @@ pub fn below_nodes(placements: &[Below], body: &FeatureBody, positions: &mut [DV
 /// shoulder, the armhole nodes and the armpit): an edge from a node placed
 /// on curve `γ` to another placed on it, or to a node tied to one of the
 /// placement's `from`/`to` feature points (parameter: that point's nearest
-/// curve point), runs the shorter way round between the two parameters,
+/// curve point), along the garment's outline (an edge of one face), runs
+/// the shorter way round between the two parameters,
 ///
 /// ```text
 /// Q_k = γ̃(s_a + (k/(n−1))·Δs) + (1 − k/(n−1))·(p_a − γ̃(s_a)) + (k/(n−1))·(p_b − γ̃(s_b))
@@ -612,6 +623,16 @@ pub fn refit_on_curve_edges(
     profiles: &mut [Option<Profile>],
 ) -> Result<usize, (u32, ProfileError)> {
     let mut refitted = 0;
+    // an armhole is an outline: edges of one face (an interior edge from an armhole node to a node
+    // tied to the shoulder point is not bent along the armscye)
+    let mut faces_of = vec![0u8; t.edges.len()];
+    for f in &t.faces {
+        for &e in &f.edges {
+            if let Some(n) = faces_of.get_mut(e as usize) {
+                *n = n.saturating_add(1);
+            }
+        }
+    }
     let curves: std::collections::BTreeSet<CurveId> = t.on_curve.iter().map(|c| c.curve).collect();
     for curve in curves {
         let (Some(loop_), Some(plane)) = (body.curves.get(&curve).map(|c| &c.polyline), girth_plane(body, curve))
@@ -634,7 +655,7 @@ pub fn refit_on_curve_edges(
         params.extend(on.iter().copied());
         for (i, e) in t.edges.iter().enumerate() {
             let (Some(&sa), Some(&sb)) = (params.get(&e.start), params.get(&e.end)) else { continue };
-            if !on.iter().any(|&(v, _)| v == e.start || v == e.end) {
+            if !on.iter().any(|&(v, _)| v == e.start || v == e.end) || faces_of[i] != 1 {
                 continue;
             }
             let Some(Some(old)) = profiles.get(i) else { continue };

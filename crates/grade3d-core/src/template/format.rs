@@ -212,11 +212,13 @@ pub struct Drop {
 /// (normal `n`):
 ///
 /// ```text
-/// s = s_from + f·Δs,   d = γ(s) − c,   p = γ(s) + r·(d − (d·n)n)/|d − (d·n)n|
+/// s = s_from + f·Δs,   d = γ(s) − c,   p = γ(s) + r·(d − (d·n)n)/|d − (d·n)n| + m·ν
 /// ```
 ///
 /// `γ` the curve as the body derives it, `Δs` the signed arc length of the
-/// chosen arc, `f` the fraction, `r` [`OnCurve::radial_m`]. Eq. (1) ties a
+/// chosen arc, `f` the fraction, `r` [`OnCurve::radial_m`], `m`
+/// [`OnCurve::normal_m`] and `ν = ±n`, the plane's normal turned away from
+/// `via` (from the torso to the arm for an armscye and a chest point). Eq. (1) ties a
 /// node to one feature point by a fixed offset in that point's frame; an
 /// armhole node about 80 mm from the armpit point then decodes inside a
 /// fuller chest (ASTM size 20: 28.6 mm inside). The curve is the body's
@@ -241,6 +243,16 @@ pub struct OnCurve {
     pub fraction: f64,
     /// Outward offset from the curve, m.
     pub radial_m: f64,
+    /// Offset along the curve plane's normal turned away from `via`, m: an
+    /// armhole authored from a garment (issue #18) lies off the armscye's
+    /// plane, towards the torso. Default 0 (the library's armholes).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub normal_m: f64,
+}
+
+/// Whether an offset is exactly zero (left out of a document).
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
 }
 
 /// A node hanging below a girth, away from the body: cloth that falls from
@@ -789,7 +801,11 @@ impl Template {
             if c.node as usize >= self.nodes.len() {
                 return Err(bad("needs an existing node"));
             }
-            if !(c.fraction.is_finite() && (0.0..=1.0).contains(&c.fraction) && c.radial_m.is_finite()) {
+            if !(c.fraction.is_finite()
+                && (0.0..=1.0).contains(&c.fraction)
+                && c.radial_m.is_finite()
+                && c.normal_m.is_finite())
+            {
                 return Err(bad("fraction must lie in [0, 1] and the offset be finite"));
             }
             if c.from == c.to {
@@ -1120,6 +1136,7 @@ mod tests {
             via: PointId::ChestFront,
             fraction,
             radial_m: 0.006,
+            normal_m: -0.004,
         };
         let mut t = tiny();
         t.on_curve.push(place(2, PointId::ShoulderLeft, 0.5));

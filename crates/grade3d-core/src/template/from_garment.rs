@@ -111,6 +111,16 @@
 //!      node and its mirror image are placed alike, height, radial
 //!      offset).
 //!
+//!    * on an armhole (an outline loop of the garment whose centroid lies
+//!      nearer an armscye's than any other girth's), the node is placed
+//!      *along the armscye* ([`OnCurve`]: arc fraction from the shoulder
+//!      point towards the armpit by the front or the back, radial offset
+//!      in the armscye's plane and offset off it;
+//!      [`GarmentOptions::armholes_along_armscye`]). Left to Eq. (1), an
+//!      armhole node 60 mm from the armpit point swung with its frame and
+//!      dropped 91 mm on a heavy man (the armhole's neighbour 26 mm): the
+//!      armhole folded back on itself and its sew line crossed.
+//!
 //!    Ring nodes are then set where decoding places them and the template
 //!    encoded again, so that decoding on the design body reproduces every
 //!    node.
@@ -131,7 +141,7 @@ use serde::{Deserialize, Serialize};
 
 use super::codec::{between_point, drop_axis, leg_length, GirthWalk};
 use super::codec::{decode, encode, CodecError, Draft, DraftPanel, DraftSeam};
-use super::format::{Below, Between, Bracket, GradingDefaults, Relocation, Template};
+use super::format::{Below, Between, Bracket, GradingDefaults, OnCurve, Relocation, Template};
 use super::garment_panels::{weld_panels, PanelError, PanelMesh, WeldOptions};
 use super::girth::{bridged, girth_plane, ring_curves, shorter_way, RING_PLANE_TOLERANCE_M};
 use crate::body::feature::FeatureBody;
@@ -280,6 +290,14 @@ pub struct GarmentOptions {
     /// bust ring node on a figure with a belly, and its sew line crossing
     /// itself). Default false.
     pub bracketed_lofts: bool,
+    /// Place the nodes of the garment's armholes (outline loops nearest an
+    /// armscye) along the body's armscyes ([`OnCurve`]; method, step 8);
+    /// false: by Eq. (1), tied to the shoulder or armpit point, whose frame
+    /// swings them on another body (an armhole node 60 mm from the armpit
+    /// point dropped 91 mm on a heavy man, below its neighbour: the
+    /// armhole folded back and its sew line crossed). A garment without an
+    /// armhole outline is not changed. Default true.
+    pub armholes_along_armscye: bool,
 }
 
 impl Default for GarmentOptions {
@@ -308,6 +326,7 @@ impl Default for GarmentOptions {
             ease_at: Vec::new(),
             grain_from_uv: true,
             bracketed_lofts: false,
+            armholes_along_armscye: true,
         }
     }
 }
@@ -1144,7 +1163,13 @@ pub fn author_from_garment(
     let ring_set: BTreeSet<u32> = ring_tie.keys().copied().collect();
     let below = hanging(&positions, &ring_set, &surface, body, &rings);
     let hung: BTreeSet<u32> = below.iter().map(|b| b.node).collect();
-    let between = lofted(&positions, &ring_set, &hung, body, &ax, (&arms, &body_index), opts.bracketed_lofts);
+    let on_curve = if opts.armholes_along_armscye {
+        on_armholes(&positions, &triangles, &ring_set.union(&hung).copied().collect(), body)
+    } else {
+        Vec::new()
+    };
+    let placed_on_curve: BTreeSet<u32> = ring_set.union(&on_curve.iter().map(|c| c.node).collect()).copied().collect();
+    let between = lofted(&positions, &placed_on_curve, &hung, body, &ax, (&arms, &body_index), opts.bracketed_lofts);
     let draft = Draft {
         name: name.to_owned(),
         version: 1,
@@ -1164,7 +1189,7 @@ pub fn author_from_garment(
         notches,
         darts: Vec::new(),
         drops: Vec::new(),
-        on_curve: Vec::new(),
+        on_curve,
         between,
         below,
         hangs: Vec::new(),
@@ -2586,6 +2611,147 @@ fn lofted(
         }
     }
     out
+}
+
+/// The arm's girths an outline loop may lie nearest (besides
+/// [`GIRTH_CURVES`]): an armhole's, or a sleeve's hem's.
+const ARM_GIRTHS: [CurveId; 8] = [
+    CurveId::ArmscyeLeft,
+    CurveId::ArmscyeRight,
+    CurveId::UpperArmLeft,
+    CurveId::UpperArmRight,
+    CurveId::ElbowLeft,
+    CurveId::ElbowRight,
+    CurveId::WristLeft,
+    CurveId::WristRight,
+];
+
+/// Nodes on the garment's armholes, placed along the body's armscyes
+/// ([`OnCurve`]; method, step 8): the outline loops of the coarse mesh
+/// (`triangles` over `positions`) whose centroid lies nearer an armscye's
+/// centroid than any other girth's, and of their nodes (not in `skip`)
+/// those that lie on the armscye's arc from the shoulder point to the
+/// armpit by the front (via the chest's front point) or by the back. Each
+/// is solved for exactly: the curve parameter `s` where the node's offset
+/// from `γ(s)` has no in-plane tangential part (sampled, then bisected),
+/// then the radial and normal offsets; one it cannot reproduce to 1 µm
+/// keeps Eq. (1).
+fn on_armholes(positions: &[DVec3], triangles: &[[u32; 3]], skip: &BTreeSet<u32>, body: &FeatureBody) -> Vec<OnCurve> {
+    // the outline: directed edges without their twin, grouped into loops by their nodes
+    let directed: BTreeSet<(u32, u32)> =
+        triangles.iter().flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])]).collect();
+    let outline: Vec<(u32, u32)> = directed.iter().copied().filter(|&(a, b)| !directed.contains(&(b, a))).collect();
+    let mut sets = UnionFind::new(positions.len());
+    for &(a, b) in &outline {
+        sets.union(a, b);
+    }
+    let mut loops: BTreeMap<u32, BTreeSet<u32>> = BTreeMap::new();
+    for &(a, _) in &outline {
+        loops.entry(sets.find(a)).or_default().insert(a);
+    }
+    let centroids: Vec<(CurveId, DVec3)> = body
+        .curves
+        .iter()
+        .filter(|(id, c)| c.polyline.closed && (GIRTH_CURVES.contains(id) || ARM_GIRTHS.contains(id)))
+        .map(|(id, c)| (*id, c.polyline.centroid()))
+        .collect();
+    let mut out = Vec::new();
+    for nodes in loops.values() {
+        let c = nodes.iter().map(|&v| positions[v as usize]).sum::<DVec3>() / nodes.len() as f64;
+        let Some(&(curve, _)) = centroids.iter().min_by(|a, b| a.1.distance(c).total_cmp(&b.1.distance(c))) else {
+            continue;
+        };
+        let (shoulder, armpit) = match curve {
+            CurveId::ArmscyeLeft => (PointId::ShoulderLeft, PointId::UnderarmLeft),
+            CurveId::ArmscyeRight => (PointId::ShoulderRight, PointId::UnderarmRight),
+            _ => continue,
+        };
+        let point = |id: PointId| body.points.get(&id).map(|q| q.position);
+        let (Some(gamma), Some(plane), Some(from), Some(to)) =
+            (body.curves.get(&curve).map(|c| &c.polyline), girth_plane(body, curve), point(shoulder), point(armpit))
+        else {
+            continue;
+        };
+        let total = gamma.length();
+        let (Some(s0), Some(s1)) = (gamma.closest(from).map(|c| c.s), gamma.closest(to).map(|c| c.s)) else { continue };
+        let centre = gamma.centroid();
+        for &node in nodes.iter().filter(|v| !skip.contains(v)) {
+            let p = positions[node as usize];
+            let Some(s) = armscye_parameter(gamma, &plane, p) else { continue };
+            for via in [PointId::ChestFront, PointId::ChestBack] {
+                let Some(v) = point(via) else { continue };
+                // the arc on_curve_point takes for this via point, and the node's fraction of it
+                let forward = (s1 - s0).rem_euclid(total);
+                let mid = |d: f64| gamma.point_at((s0 + 0.5 * d).rem_euclid(total)).distance(v);
+                let d = if mid(forward) <= mid(forward - total) { forward } else { forward - total };
+                let along = if d >= 0.0 { (s - s0).rem_euclid(total) } else { -(s0 - s).rem_euclid(total) };
+                let fraction = along / d;
+                if !(0.0..=1.0).contains(&fraction) {
+                    continue;
+                }
+                let Some((_, q)) = super::codec::on_curve_point(gamma, &plane, (from, to, v), fraction, 0.0) else {
+                    continue;
+                };
+                let nu = super::codec::turned_normal(&plane, centre, v);
+                let out_dir = {
+                    let d = q - centre;
+                    (d - plane.normal * d.dot(plane.normal)).normalize_or_zero()
+                };
+                let (radial_m, normal_m) = ((p - q).dot(out_dir), (p - q).dot(nu));
+                if (q + out_dir * radial_m + nu * normal_m).distance(p) > 1e-6 {
+                    continue;
+                }
+                out.push(OnCurve { node, curve, from: shoulder, to: armpit, via, fraction, radial_m, normal_m });
+                break;
+            }
+        }
+    }
+    out
+}
+
+/// The parameter `s` of the closed curve `gamma` at which `p − γ(s)` has
+/// no part along the in-plane tangent `ν × d̂(s)` (`d̂` the in-plane
+/// direction from the curve's centroid, `ν` the plane's normal): the roots
+/// of that tangential offset, sampled at 720 points and bisected, the one
+/// nearest `p`.
+fn armscye_parameter(gamma: &Polyline, plane: &Plane, p: DVec3) -> Option<f64> {
+    let total = gamma.length();
+    if total <= f64::EPSILON {
+        return None;
+    }
+    let centre = gamma.centroid();
+    let tangential = |s: f64| {
+        let q = gamma.point_at(s.rem_euclid(total));
+        let d = q - centre;
+        let out = (d - plane.normal * d.dot(plane.normal)).normalize_or_zero();
+        ((p - q).dot(plane.normal.cross(out)), q.distance(p))
+    };
+    const SAMPLES: usize = 720;
+    let mut best: Option<(f64, f64)> = None; // (distance, s)
+    let mut prev = tangential(0.0).0;
+    for k in 1..=SAMPLES {
+        let (lo0, hi0) = ((k - 1) as f64 * total / SAMPLES as f64, k as f64 * total / SAMPLES as f64);
+        let cur = tangential(hi0).0;
+        if prev * cur <= 0.0 {
+            let (mut lo, mut hi, mut tlo) = (lo0, hi0, prev);
+            for _ in 0..60 {
+                let mid = 0.5 * (lo + hi);
+                let t = tangential(mid).0;
+                if tlo * t <= 0.0 {
+                    hi = mid;
+                } else {
+                    (lo, tlo) = (mid, t);
+                }
+            }
+            let s = 0.5 * (lo + hi);
+            let dist = tangential(s).1;
+            if best.is_none_or(|(d0, _)| dist < d0) {
+                best = Some((dist, s.rem_euclid(total)));
+            }
+        }
+        prev = cur;
+    }
+    best.map(|(_, s)| s)
 }
 
 /// The [`Bracket`] of the point at the fraction `f` of girth `w` from

@@ -578,6 +578,7 @@ pub fn fitted_bodice(body: &FeatureBody, o: &BodiceOptions) -> Result<Template, 
                 via,
                 fraction: 0.5,
                 radial_m: radial,
+                normal_m: 0.0,
             });
             Ok((node, s))
         };
