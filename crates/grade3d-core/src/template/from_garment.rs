@@ -2558,7 +2558,7 @@ fn lofted(
     // its midline points (neither left nor right) where it has one, so that a node and its
     // mirror image are placed from one start (from `bust_left`, the bust apex furthest front to
     // rounding, the two sides of the dress's underbust moved apart by 5 mm on another body)
-    let mut girths: Vec<(CurveId, GirthWalk, PointId, f64, Vec<(PointId, f64)>)> = TORSO
+    let mut girths: Vec<LoftGirth> = TORSO
         .iter()
         .filter_map(|&c| {
             let w = GirthWalk::new(body, c)?;
@@ -2578,10 +2578,10 @@ fn lofted(
                 .filter_map(|d| Some((d.id, body.points.get(&d.id)?.position)))
                 .max_by(|a, b| (a.1 - w.centroid).dot(ax.front).total_cmp(&(b.1 - w.centroid).dot(ax.front)))?;
             let s0 = w.start(start.1)?;
-            Some((c, w, start.0, s0, params))
+            Some(LoftGirth { curve: c, walk: w, start: start.0, s0, points: params })
         })
         .collect();
-    girths.sort_by(|a, b| a.1.centroid.dot(ax.up).total_cmp(&b.1.centroid.dot(ax.up)));
+    girths.sort_by(|a, b| a.walk.centroid.dot(ax.up).total_cmp(&b.walk.centroid.dot(ax.up)));
     let mut out = Vec::new();
     for (i, &p) in positions.iter().enumerate() {
         let node = i as u32;
@@ -2591,7 +2591,7 @@ fn lofted(
         let height = p.dot(ax.up);
         let Some(k) = girths
             .windows(2)
-            .position(|w| w[0].1.centroid.dot(ax.up) <= height && height <= w[1].1.centroid.dot(ax.up))
+            .position(|w| w[0].walk.centroid.dot(ax.up) <= height && height <= w[1].walk.centroid.dot(ax.up))
         else {
             continue;
         };
@@ -2600,10 +2600,12 @@ fn lofted(
             continue;
         }
         let (lower, upper) = (&girths[k], &girths[k + 1]);
-        if let Some(b) = solve_between(p, (lower.0, &lower.1, lower.2, lower.3), (upper.0, &upper.1, upper.2, upper.3))
-        {
+        if let Some(b) = solve_between(p, lower.ends(), upper.ends()) {
             let (lower_bracket, upper_bracket) = if bracketed {
-                (bracket(&lower.1, &lower.4, lower.3, b.fraction), bracket(&upper.1, &upper.4, upper.3, b.fraction))
+                (
+                    bracket(&lower.walk, &lower.points, lower.s0, b.fraction),
+                    bracket(&upper.walk, &upper.points, upper.s0, b.fraction),
+                )
             } else {
                 (None, None)
             };
@@ -2611,6 +2613,24 @@ fn lofted(
         }
     }
     out
+}
+
+/// A torso girth a node may be lofted from ([`lofted`]).
+struct LoftGirth {
+    curve: CurveId,
+    walk: GirthWalk,
+    /// The feature point its walk starts at, and that point's arc parameter.
+    start: PointId,
+    s0: f64,
+    /// Its feature points by their arc parameters, for brackets.
+    points: Vec<(PointId, f64)>,
+}
+
+impl LoftGirth {
+    /// What [`solve_between`] takes of it.
+    fn ends(&self) -> (CurveId, &GirthWalk, PointId, f64) {
+        (self.curve, &self.walk, self.start, self.s0)
+    }
 }
 
 /// The arm's girths an outline loop may lie nearest (besides
