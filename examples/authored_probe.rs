@@ -246,6 +246,9 @@ fn main() {
     if std::env::var("FREE_SEAMS").is_ok() {
         go.pattern.negotiate_seams = false;
     }
+    if let Ok(f) = std::env::var("PFLAT") {
+        go.pattern.flatten = serde_json::from_str(&f).unwrap();
+    }
     if let Ok(a) = std::env::var("AUTO") {
         go.pattern.auto_darts = serde_json::from_str(&a).unwrap();
     }
@@ -363,6 +366,15 @@ fn main() {
 static SURFACE_OF: std::sync::OnceLock<grade3d::geom::mesh::TriMesh> = std::sync::OnceLock::new();
 
 fn print(body: &FeatureBody, name: &str, g: &Graded) {
+    for r in g.pattern.reports.iter().filter(|r| !r.converged) {
+        println!("    piece {} not converged after {} iterations", r.name, r.iterations);
+    }
+    for s in g.pattern.seams.iter().filter(|s| s.mismatch_mm > 1.0) {
+        println!(
+            "    seam {} ({} / {}) mismatch {:.2} mm: {:.1} vs {:.1} mm, 3D {:.1} mm",
+            s.name, s.piece_a, s.piece_b, s.mismatch_mm, s.length_a_mm, s.length_b_mm, s.length_3d_mm
+        );
+    }
     if let (Some(surface), "design") = (SURFACE_OF.get(), name) {
         // graded → designed, signed outwards (from the body's vertical axis), by height above the hip
         use grade3d::geom::query::SphereIndex;

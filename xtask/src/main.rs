@@ -132,6 +132,12 @@ fn run(what: DataCommand) -> Result<(), Box<dyn std::error::Error>> {
                     drawn::a_line_skirt_surface(&body, &a_line)?,
                 ),
                 ("shift-dress", drawn::shift_dress_curves(&body, &dress)?, drawn::shift_dress_surface(&body, &dress)?),
+                // the library's shift dress
+                (
+                    "princess-dress",
+                    drawn::shift_dress_curves(&body, &drawn::ShiftDressOptions::princess())?,
+                    drawn::shift_dress_surface(&body, &drawn::ShiftDressOptions::princess())?,
+                ),
             ];
             for (name, curves, pieces) in styles {
                 let path = dir.join(format!("{name}.curves.json"));

@@ -645,13 +645,14 @@ mod tests {
     fn the_template_schema_keeps_every_constraint() {
         let parts = template_components().unwrap();
         let names: Vec<&str> = parts.iter().map(|(n, _)| n.as_str()).collect();
-        assert_eq!(names, ["TemplateVec3", "Template"]);
+        assert_eq!(names, ["TemplateBracket", "TemplateVec3", "Template"]);
         let mut want: serde_json::Value = serde_json::from_str(grade3d_core::template::format::SCHEMA_JSON).unwrap();
         let o = want.as_object_mut().unwrap();
         o.remove("$schema");
         o.remove("$id");
-        let vec3 = o.remove("$defs").unwrap()["vec3"].clone();
-        let got = serde_json::to_value(&parts[1].1).unwrap();
+        let defs = o.remove("$defs").unwrap();
+        let (bracket, vec3) = (defs["bracket"].clone(), defs["vec3"].clone());
+        let got = serde_json::to_value(&parts[2].1).unwrap();
         let text = |v: &serde_json::Value| {
             v.to_string()
                 .replace(
@@ -661,8 +662,10 @@ mod tests {
                 .replace(r#""enum":[1,-1]"#, r#""enum":[1,-1],"type":"integer""#)
                 .replace(r#""enum":["eq1_frame","eq2_offset"]"#, r#""enum":["eq1_frame","eq2_offset"],"type":"string""#)
                 .replace("#/$defs/vec3", "#/components/schemas/TemplateVec3")
+                .replace("#/$defs/bracket", "#/components/schemas/TemplateBracket")
         };
         assert_eq!(got, serde_json::from_str::<serde_json::Value>(&text(&want)).unwrap());
-        assert_eq!(serde_json::to_value(&parts[0].1).unwrap(), vec3);
+        assert_eq!(serde_json::to_value(&parts[0].1).unwrap(), bracket);
+        assert_eq!(serde_json::to_value(&parts[1].1).unwrap(), vec3);
     }
 }
