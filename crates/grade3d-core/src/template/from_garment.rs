@@ -3011,6 +3011,34 @@ mod tests {
     use super::*;
     use glam::DVec2;
 
+    /// Planted: on an ellipse in the plane `x = 0.2` (an armscye seen from
+    /// the side), a point `r` out from the curve point at 70° within the
+    /// plane and `m` off it is found at that curve point, and the offsets
+    /// read back exactly; a point beyond the ellipse's other side finds the
+    /// parameter on its own side.
+    #[test]
+    fn an_armhole_node_is_found_on_its_armscye_with_its_offsets() {
+        let (a, b) = (0.06, 0.09);
+        let at = |deg: f64| DVec3::new(0.2, b * deg.to_radians().sin(), a * deg.to_radians().cos());
+        let gamma = Polyline::new((0..720).map(|k| at(k as f64 * 0.5)).collect(), true);
+        let plane = Plane { normal: DVec3::X, offset: 0.2 };
+        let centre = gamma.centroid();
+        let q = at(70.0);
+        let out = ((q - centre) - DVec3::X * (q - centre).x).normalize();
+        for (r, m) in [(0.012, -0.008), (0.0, 0.02), (0.03, 0.0)] {
+            let p = q + out * r + DVec3::X * m;
+            let s = armscye_parameter(&gamma, &plane, p).expect("a root");
+            let found = gamma.point_at(s);
+            assert!(found.distance(q) < 1e-6, "r {r} m {m}: {found} for {q}");
+            let d = found - centre;
+            let dir = (d - DVec3::X * d.x).normalize();
+            assert!(((p - found).dot(dir) - r).abs() < 1e-9 && ((p - found).x - m).abs() < 1e-12);
+        }
+        // a curve without length has no parameter
+        let flat = Polyline::new(vec![DVec3::ZERO; 4], true);
+        assert!(armscye_parameter(&flat, &plane, q).is_none());
+    }
+
     /// Two bands on either side of a straight seam through nodes 0, 1, 2,
     /// each contracted to the ear on those three seam nodes and a triangle
     /// on its chord: the ear is in both bands (crowded). Flipping a band's
