@@ -145,7 +145,7 @@ use super::format::{Below, Between, Bracket, GradingDefaults, OnCurve, Relocatio
 use super::garment_panels::{weld_panels, PanelError, PanelMesh, WeldOptions};
 use super::girth::{bridged, girth_plane, ring_curves, shorter_way, RING_PLANE_TOLERANCE_M};
 use crate::body::feature::FeatureBody;
-use crate::body::vocab::{optional_point, point_def, CurveId, PointDef, PointId, GIRTH_CURVES, POINTS};
+use crate::body::vocab::{optional_point, point_def, CurveId, PointDef, PointId, ARM_CURVES, GIRTH_CURVES, POINTS};
 use crate::geom::cut::split_by_plane;
 use crate::geom::flip::{flipped_pair, lawson_flips, FlipOptions};
 use crate::geom::mesh::{boundary_loops, TriMesh, VertexId};
@@ -2639,23 +2639,10 @@ impl LoftGirth {
     }
 }
 
-/// The arm's girths an outline loop may lie nearest (besides
-/// [`GIRTH_CURVES`]): an armhole's, or a sleeve's hem's.
-const ARM_GIRTHS: [CurveId; 8] = [
-    CurveId::ArmscyeLeft,
-    CurveId::ArmscyeRight,
-    CurveId::UpperArmLeft,
-    CurveId::UpperArmRight,
-    CurveId::ElbowLeft,
-    CurveId::ElbowRight,
-    CurveId::WristLeft,
-    CurveId::WristRight,
-];
-
 /// Nodes on the garment's armholes, placed along the body's armscyes
 /// ([`OnCurve`]; method, step 8): the outline loops of the coarse mesh
 /// (`triangles` over `positions`) whose centroid lies nearer an armscye's
-/// centroid than any other girth's, and of their nodes (not in `skip`)
+/// centroid than any other girth's (torso, leg or arm), and of their nodes (not in `skip`)
 /// those that lie on the armscye's arc from the shoulder point to the
 /// armpit by the front (via the chest's front point) or by the back. Each
 /// is solved for exactly: the curve parameter `s` where the node's offset
@@ -2678,7 +2665,10 @@ fn on_armholes(positions: &[DVec3], triangles: &[[u32; 3]], skip: &BTreeSet<u32>
     let centroids: Vec<(CurveId, DVec3)> = body
         .curves
         .iter()
-        .filter(|(id, c)| c.polyline.closed && (GIRTH_CURVES.contains(id) || ARM_GIRTHS.contains(id)))
+        .filter(|(id, c)| {
+            let arm = ARM_CURVES.contains(id) || matches!(id, CurveId::ArmscyeLeft | CurveId::ArmscyeRight);
+            c.polyline.closed && (GIRTH_CURVES.contains(id) || arm)
+        })
         .map(|(id, c)| (*id, c.polyline.centroid()))
         .collect();
     let mut out = Vec::new();
