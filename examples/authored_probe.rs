@@ -422,6 +422,10 @@ fn print(body: &FeatureBody, name: &str, g: &Graded) {
         let triangles = g.mesh.triangles.iter().map(|t| t.map(|v| usize::from(v) as u32)).collect();
         let path = format!("{dir}/{}-graded.obj", name.replace('/', "-"));
         write_mesh(&path, "graded", g.mesh.positions.iter().copied().collect(), triangles);
+        // and the surface the pattern is cut from (symmetrised on a symmetric body)
+        let triangles = g.mesh.triangles.iter().map(|t| t.map(|v| usize::from(v) as u32)).collect();
+        let path = format!("{dir}/{}-cut.obj", name.replace('/', "-"));
+        write_mesh(&path, "cut", g.cut_positions.iter().copied().collect(), triangles);
     }
     if let Ok(dir) = std::env::var("SVG") {
         let svg = grade3d::pattern::export::svg::pieces_svg(&g.pattern.pieces, &Default::default());
