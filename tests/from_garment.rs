@@ -175,6 +175,25 @@ fn round_trip(
     (to_design, to_graded, g)
 }
 
+/// Regression (issue #18): ARAP's iteration diverged on the authored
+/// tights' back piece when let run 3000 iterations (the cap tried for the
+/// dress's darted pieces), and the grade failed with `Factorisation("the
+/// ARAP solution is not finite")`: a non-finite state passed for the best
+/// one. The literal input: `helper-tights` graded on its design body with
+/// `pattern.flatten.max_iterations` 3000. Planted: the grade succeeds and
+/// every sew line is finite.
+#[test]
+fn regression_a_diverging_flattening_keeps_its_best_finite_state() {
+    let (_, tights) = &authored()[1];
+    let mut opts = GradeOptions::default();
+    opts.pattern.flatten.max_iterations = 3000;
+    let g = grade(&tights.template, design_body(), Some(&obstacle(&design_body().mesh)), "design", &opts)
+        .expect("a finite flattening");
+    for p in &g.pattern.pieces {
+        assert!(p.sew_line.iter().all(|q| q.is_finite()), "{}", p.name);
+    }
+}
+
 #[test]
 fn round_trip_onto_the_design_body() {
     let obstacle = obstacle(&design_body().mesh);

@@ -1097,6 +1097,12 @@ impl Mesh {
                 }
             }
             e_spring *= 0.5;
+            if !(e_arap.is_finite() && e_spring.is_finite()) {
+                // diverged (an extrapolated state overflowed): the best finite state stands. Its
+                // residual would not show it (`f64::max` passes over NaN), and a NaN state taken
+                // as the best failed the tights' back piece at 3000 iterations
+                break;
+            }
             let objective = if exact { e_arap } else { e_arap + e_spring };
             // the best state so far, for a stop at max_iterations (the present one may be an
             // extrapolation that the next step would reject): with exact boundaries the one
