@@ -786,24 +786,14 @@ fn a_seam_crossing_a_girth_line_away_from_its_points_stays_on_the_seam() {
 #[test]
 fn a_symmetric_dress_drafted_in_halves_with_its_girth_lines_split() {
     use grade3d::body::vocab::{point_def, CurveId};
-    use grade3d::geom::flip::FlipOptions;
     use grade3d::template::drawn::{self, ShiftDressOptions};
     use grade3d::template::girth::{girth_plane, RING_PLANE_TOLERANCE_M};
     let body = grade3d::template::library::reference_body().unwrap();
     let o = ShiftDressOptions { princess_seams: true, smooth_columns: true, ..Default::default() };
     let pieces = drawn::shift_dress_surface(&body, &o).unwrap();
-    let spacing_mm = 40.0;
-    let opts = GarmentOptions {
-        max_edge_mm: 50.0,
-        interior_spacing: 0.5,
-        ease_at: vec!["bust".into(), "waist".into(), "hip".into()],
-        keep_crossings: true,
-        ring_spacing_mm: spacing_mm,
-        mirror_halves: true,
-        one_node_a_corner: true,
-        flips: FlipOptions { cap_angle_deg: 170.0, ..FlipOptions::default() },
-        ..drawn::garment_options()
-    };
+    // the dress's own options, its lofted nodes walked from the girths' starts (as first drafted)
+    let opts = GarmentOptions { bracketed_lofts: false, ..drawn::dress_garment_options() };
+    let spacing_mm = opts.ring_spacing_mm;
     let a = author_from_garment("princess-dress", &pieces, &body, &opts).unwrap();
     let t = &a.template;
     assert!(a.unmapped.is_empty(), "{:?}", a.unmapped);

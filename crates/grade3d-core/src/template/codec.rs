@@ -379,6 +379,16 @@ pub fn on_curve_point(
     fraction: f64,
     radial: f64,
 ) -> Option<(f64, DVec3)> {
+    let (s0, d) = on_curve_arc(loop_, (from, to, via))?;
+    let s = (s0 + fraction * d).rem_euclid(loop_.length());
+    Some((s, eased(loop_, s, radial, plane)))
+}
+
+/// The arc of an [`OnCurve`] placement on `loop_`: the parameter `s_from`
+/// of the point nearest `from` and the signed arc length `Δs` to the point
+/// nearest `to`, the way round whose midpoint is nearer `via`; `None` for a
+/// loop without length.
+pub fn on_curve_arc(loop_: &Polyline, (from, to, via): (DVec3, DVec3, DVec3)) -> Option<(f64, f64)> {
     let total = loop_.length();
     if total <= f64::EPSILON {
         return None;
@@ -387,9 +397,7 @@ pub fn on_curve_point(
     let forward = (s1 - s0).rem_euclid(total);
     let backward = forward - total;
     let mid = |d: f64| loop_.point_at((s0 + 0.5 * d).rem_euclid(total)).distance(via);
-    let d = if mid(forward) <= mid(backward) { forward } else { backward };
-    let s = (s0 + fraction * d).rem_euclid(total);
-    Some((s, eased(loop_, s, radial, plane)))
+    Some((s0, if mid(forward) <= mid(backward) { forward } else { backward }))
 }
 
 /// The normal `ν` of an [`OnCurve`] placement (formula there): `plane`'s
@@ -517,21 +525,28 @@ pub fn between_nodes(placements: &[Between], body: &FeatureBody, positions: &mut
         walks.entry(b).or_insert_with(|| GirthWalk::new(body, b));
     }
     let mut placed = Vec::new();
-    let point = |id: PointId| body.points.get(&id).map(|q| q.position);
+    // each feature point's parameter on a girth, taken once (a closest-point search along it)
+    let mut params: BTreeMap<(CurveId, PointId), Option<f64>> = BTreeMap::new();
+    let mut param = |curve: CurveId, id: PointId| {
+        *params.entry((curve, id)).or_insert_with(|| walks.get(&curve)?.as_ref()?.start(body.points.get(&id)?.position))
+    };
     // a girth's point: in its bracket where the placement has one, else at the fraction of the
     // whole girth from its start
-    let girth_point = |w: &GirthWalk, start: PointId, bracket: Option<Bracket>, fraction: f64| match bracket {
-        Some(k) => Some(w.at_bracket(w.start(point(k.from)?)?, w.start(point(k.to)?)?, k.fraction)),
-        None => Some(w.at(w.start(point(start)?)?, fraction)),
+    let mut girth_point = |curve: CurveId, start: PointId, bracket: Option<Bracket>, fraction: f64| {
+        let w = walks.get(&curve)?.as_ref()?;
+        match bracket {
+            Some(k) => Some(w.at_bracket(param(curve, k.from)?, param(curve, k.to)?, k.fraction)),
+            None => Some(w.at(param(curve, start)?, fraction)),
+        }
     };
     for b in placements {
-        let (Some(Some(lw)), Some(Some(uw))) = (walks.get(&b.lower), walks.get(&b.upper)) else { continue };
         let (Some(a), Some(u)) = (
-            girth_point(lw, b.lower_start, b.lower_bracket, b.fraction),
-            girth_point(uw, b.upper_start, b.upper_bracket, b.fraction),
+            girth_point(b.lower, b.lower_start, b.lower_bracket, b.fraction),
+            girth_point(b.upper, b.upper_start, b.upper_bracket, b.fraction),
         ) else {
             continue;
         };
+        let (Some(Some(lw)), Some(Some(uw))) = (walks.get(&b.lower), walks.get(&b.upper)) else { continue };
         let Some(p) = loft((a, lw.centroid), (u, uw.centroid), b.height, b.radial_m) else { continue };
         if let Some(slot) = positions.get_mut(b.node as usize) {
             *slot = p;

@@ -599,15 +599,7 @@ pub fn shift_dress_curves(body: &FeatureBody, o: &ShiftDressOptions) -> Result<V
         let from = line.closest(neck_end).map_or(0.0, |c| c.s);
         let to = from + (line.length() - from) * o.shoulder_fraction.clamp(MIN_SHOULDER_FRACTION, 1.0);
         let arc = line.arc(from, to);
-        let (gap, total) = (neck_end - arc.points[0], arc.length().max(f64::EPSILON));
-        let mut s = 0.0;
-        pts = Vec::with_capacity(arc.points.len());
-        for (k, p) in arc.points.iter().enumerate() {
-            if k > 0 {
-                s += arc.points[k - 1].distance(*p);
-            }
-            pts.push(*p + gap * (1.0 - s / total));
-        }
+        pts = shifted_along(&arc.points, neck_end - arc.points[0], DVec3::ZERO);
         let end = pts[pts.len() - 1];
         Ok((pts.iter().map(|p| p.to_array()).collect(), end))
     };
@@ -637,18 +629,8 @@ pub fn shift_dress_curves(body: &FeatureBody, o: &ShiftDressOptions) -> Result<V
         let (a, b) = (way(1), way(m - 1));
         let depth = |w: &[DVec3]| w.iter().map(|p| p.dot(d.z_dir)).sum::<f64>() / w.len() as f64;
         let half = if (depth(&a) > depth(&b)) == front { a } else { b };
-        let total: f64 = half.windows(2).map(|w| w[0].distance(w[1])).sum::<f64>().max(f64::EPSILON);
-        let (d0, d1) = (from - half[0], to - half[half.len() - 1]);
-        let mut s = 0.0;
-        let mut out = Vec::with_capacity(half.len());
-        for (k, p) in half.iter().enumerate() {
-            if k > 0 {
-                s += half[k - 1].distance(*p);
-            }
-            let t = s / total;
-            out.push((*p + d0 * (1.0 - t) + d1 * t).to_array());
-        }
-        Ok(out)
+        let moved = shifted_along(&half, from - half[0], to - half[half.len() - 1]);
+        Ok(moved.iter().map(|p| p.to_array()).collect())
     };
     let chest = &levels[0];
     let mut panels = Vec::new();
@@ -793,6 +775,26 @@ impl<'a> Form<'a> {
         let [a, b, c] = mesh.corners(near.face);
         near.point + (b - a).cross(c - a).normalize_or_zero() * clearance
     }
+}
+
+/// `points` (a polyline) moved by an offset fading along its arc length
+/// from `start` at its first point to `end` at its last:
+/// `p_k + (1 − t_k)·start + t_k·end`, `t_k` the arc fraction of `p_k`. A
+/// drawn line is so bent onto an end point it must meet (an armhole onto
+/// the eased chest's side point, a shoulder seam onto the eased
+/// neckline's).
+fn shifted_along(points: &[DVec3], start: DVec3, end: DVec3) -> Vec<DVec3> {
+    let total: f64 = points.windows(2).map(|w| w[0].distance(w[1])).sum::<f64>().max(f64::EPSILON);
+    let mut s = 0.0;
+    let mut out = Vec::with_capacity(points.len());
+    for (k, p) in points.iter().enumerate() {
+        if k > 0 {
+            s += points[k - 1].distance(*p);
+        }
+        let t = s / total;
+        out.push(*p + start * (1.0 - t) + end * t);
+    }
+    out
 }
 
 /// Each point's mirror partner under `mirror` (an involution): pairs `(i,

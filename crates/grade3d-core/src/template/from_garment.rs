@@ -143,7 +143,7 @@ use super::codec::{between_point, drop_axis, leg_length, GirthWalk};
 use super::codec::{decode, encode, CodecError, Draft, DraftPanel, DraftSeam};
 use super::format::{Below, Between, Bracket, GradingDefaults, OnCurve, Relocation, Template};
 use super::garment_panels::{weld_panels, PanelError, PanelMesh, WeldOptions};
-use super::girth::{bridged, girth_plane, ring_curves, shorter_way, RING_PLANE_TOLERANCE_M};
+use super::girth::{bridged, girth_plane, outward, ring_curves, shorter_way, RING_PLANE_TOLERANCE_M};
 use crate::body::feature::FeatureBody;
 use crate::body::vocab::{optional_point, point_def, CurveId, PointDef, PointId, ARM_CURVES, GIRTH_CURVES, POINTS};
 use crate::geom::cut::split_by_plane;
@@ -2650,18 +2650,6 @@ impl LoftGirth {
 /// then the radial and normal offsets; one it cannot reproduce to 1 µm
 /// keeps Eq. (1).
 fn on_armholes(positions: &[DVec3], triangles: &[[u32; 3]], skip: &BTreeSet<u32>, body: &FeatureBody) -> Vec<OnCurve> {
-    // the outline: directed edges without their twin, grouped into loops by their nodes
-    let directed: BTreeSet<(u32, u32)> =
-        triangles.iter().flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])]).collect();
-    let outline: Vec<(u32, u32)> = directed.iter().copied().filter(|&(a, b)| !directed.contains(&(b, a))).collect();
-    let mut sets = UnionFind::new(positions.len());
-    for &(a, b) in &outline {
-        sets.union(a, b);
-    }
-    let mut loops: BTreeMap<u32, BTreeSet<u32>> = BTreeMap::new();
-    for &(a, _) in &outline {
-        loops.entry(sets.find(a)).or_default().insert(a);
-    }
     let centroids: Vec<(CurveId, DVec3)> = body
         .curves
         .iter()
@@ -2672,7 +2660,7 @@ fn on_armholes(positions: &[DVec3], triangles: &[[u32; 3]], skip: &BTreeSet<u32>
         .map(|(id, c)| (*id, c.polyline.centroid()))
         .collect();
     let mut out = Vec::new();
-    for nodes in loops.values() {
+    for nodes in boundary_loops(triangles) {
         let c = nodes.iter().map(|&v| positions[v as usize]).sum::<DVec3>() / nodes.len() as f64;
         let Some(&(curve, _)) = centroids.iter().min_by(|a, b| a.1.distance(c).total_cmp(&b.1.distance(c))) else {
             continue;
@@ -2688,18 +2676,20 @@ fn on_armholes(positions: &[DVec3], triangles: &[[u32; 3]], skip: &BTreeSet<u32>
         else {
             continue;
         };
-        let total = gamma.length();
-        let (Some(s0), Some(s1)) = (gamma.closest(from).map(|c| c.s), gamma.closest(to).map(|c| c.s)) else { continue };
-        let centre = gamma.centroid();
+        let (total, centre) = (gamma.length(), gamma.centroid());
+        // the arc on_curve_point takes by the front and by the back
+        let arcs: Vec<(PointId, DVec3, (f64, f64))> = [PointId::ChestFront, PointId::ChestBack]
+            .into_iter()
+            .filter_map(|via| {
+                let v = point(via)?;
+                Some((via, v, super::codec::on_curve_arc(gamma, (from, to, v))?))
+            })
+            .collect();
         for &node in nodes.iter().filter(|v| !skip.contains(v)) {
             let p = positions[node as usize];
             let Some(s) = armscye_parameter(gamma, &plane, p) else { continue };
-            for via in [PointId::ChestFront, PointId::ChestBack] {
-                let Some(v) = point(via) else { continue };
-                // the arc on_curve_point takes for this via point, and the node's fraction of it
-                let forward = (s1 - s0).rem_euclid(total);
-                let mid = |d: f64| gamma.point_at((s0 + 0.5 * d).rem_euclid(total)).distance(v);
-                let d = if mid(forward) <= mid(forward - total) { forward } else { forward - total };
+            // the node's fraction of each arc
+            for &(via, v, (s0, d)) in &arcs {
                 let along = if d >= 0.0 { (s - s0).rem_euclid(total) } else { -(s0 - s).rem_euclid(total) };
                 let fraction = along / d;
                 if !(0.0..=1.0).contains(&fraction) {
@@ -2709,10 +2699,7 @@ fn on_armholes(positions: &[DVec3], triangles: &[[u32; 3]], skip: &BTreeSet<u32>
                     continue;
                 };
                 let nu = super::codec::turned_normal(&plane, centre, v);
-                let out_dir = {
-                    let d = q - centre;
-                    (d - plane.normal * d.dot(plane.normal)).normalize_or_zero()
-                };
+                let out_dir = outward(&plane, centre, q);
                 let (radial_m, normal_m) = ((p - q).dot(out_dir), (p - q).dot(nu));
                 if (q + out_dir * radial_m + nu * normal_m).distance(p) > 1e-6 {
                     continue;
@@ -2738,9 +2725,7 @@ fn armscye_parameter(gamma: &Polyline, plane: &Plane, p: DVec3) -> Option<f64> {
     let centre = gamma.centroid();
     let tangential = |s: f64| {
         let q = gamma.point_at(s.rem_euclid(total));
-        let d = q - centre;
-        let out = (d - plane.normal * d.dot(plane.normal)).normalize_or_zero();
-        ((p - q).dot(plane.normal.cross(out)), q.distance(p))
+        ((p - q).dot(plane.normal.cross(outward(plane, centre, q))), q.distance(p))
     };
     const SAMPLES: usize = 720;
     let mut best: Option<(f64, f64)> = None; // (distance, s)

@@ -161,10 +161,16 @@ impl<'a> Walk<'a> {
     /// [`eased`].
     fn eased(&self, s: f64, radial: f64, plane: &Plane) -> DVec3 {
         let p = self.loop_.point_at_with(&self.cum, s);
-        let d = p - self.centroid;
-        let out = (d - plane.normal * d.dot(plane.normal)).normalize_or_zero();
-        p + out * radial
+        p + outward(plane, self.centroid, p) * radial
     }
+}
+
+/// The unit direction from `centre` to `p` within `plane` (the direction
+/// [`eased`] moves a girth point out along); zero where `p` lies over the
+/// centre.
+pub fn outward(plane: &Plane, centre: DVec3, p: DVec3) -> DVec3 {
+    let d = p - centre;
+    (d - plane.normal * d.dot(plane.normal)).normalize_or_zero()
 }
 
 /// The ring edges of `curve` in `t` decoded at `positions` (module docs),
