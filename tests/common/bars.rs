@@ -80,7 +80,8 @@ pub struct Bars {
     clear_ms: f64,
     at_contact: Vec<String>,
     area: BTreeMap<String, Worst>,
-    mirror_mesh: Worst,
+    /// The worst sew-line difference of a mirror pair on a symmetric body, mm.
+    pub mirror_mesh: Worst,
     mirror_scan: Worst,
     internal_lines: usize,
     open_over: Worst,

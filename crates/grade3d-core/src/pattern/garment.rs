@@ -62,6 +62,7 @@ use super::darts::{dart_opening, insert_darts, AutoDartOptions, DartGuides, Dart
 use super::fabric::{fabric_strain, FabricStrain};
 use super::flatten::{distortion, flatten_with_sewn_lengths, Distortion, FlattenError, FlattenOptions, Flattening};
 use super::grade::{mirror_difference, MirrorDifference};
+use super::mirror::{mirror_map, mirrored_flattening};
 use super::panels::{cut_plain, CutGarment, Panel, PanelError, PanelVertex, SeamChain};
 use super::piece::PatternPiece;
 use crate::geom::mesh::{FaceId, VertexId};
@@ -104,6 +105,13 @@ pub struct PatternOptions {
     /// 5–6 mm of a vertex after the depth-map collision; a scan's halves
     /// differ by centimetres, and each side is searched on its own).
     pub mirror_tolerance_mm: f64,
+    /// The second panel of a template mirror pair is flattened as the mirror
+    /// image of its first ([`super::mirror`]) when the two panels mirror
+    /// each other vertex for vertex within this, mm; else on its own.
+    /// Default 0.01 (a surface symmetrised by [`crate::refine::symmetry`]
+    /// mirrors to rounding, about 10⁻⁹ mm; a scan's halves differ by
+    /// centimetres).
+    pub mirror_flatten_tolerance_mm: f64,
     /// A template mirror pair is cut as one piece (quantity 2, a cut pair)
     /// when, on the size that decides (a run's base size, or a single
     /// grade), its two pieces' sew lines lie within this of each other after
@@ -138,6 +146,7 @@ impl Default for PatternOptions {
             negotiation_power: 2.0,
             search_every_size: false,
             mirror_tolerance_mm: 10.0,
+            mirror_flatten_tolerance_mm: 0.01,
             cut_pair_line_mm: 3.0,
             cut_pair_extent_pct: 1.0,
             block_strain_slack: 0.01,
@@ -786,6 +795,7 @@ fn pattern_once(
         Search::Find(barrier) => barrier,
         _ => &empty,
     };
+    let plane = mirror_plane(t, positions);
     let second_of: Vec<Option<usize>> = cut_panels
         .iter()
         .map(|p| {
@@ -795,22 +805,30 @@ fn pattern_once(
         .collect();
     loop {
         // step: this pass's darts (declared, and found or carried)
-        let PassDarts { panels, found_darts, free } =
-            pass_darts(t, positions, &cut_panels, seams, opts, search, &cap, &mut searched, &second_of, barrier)?;
+        let PassDarts { panels, found_darts, free } = pass_darts(
+            t,
+            positions,
+            &cut_panels,
+            seams,
+            opts,
+            search,
+            &cap,
+            &mut searched,
+            (&second_of, plane),
+            barrier,
+        )?;
         // step: the seams' sewn lengths, negotiated between their sides
-        let sewn = sewn_lengths(&panels, free, seams, n_nodes, opts, find_darts)?;
+        let sewn = sewn_lengths(&panels, free, seams, n_nodes, opts, find_darts, (&second_of, plane))?;
         let mut pieces = Vec::with_capacity(panels.len());
         let mut placed = Vec::with_capacity(panels.len());
         let mut reports = Vec::with_capacity(panels.len());
         let mut refused = false;
-        // the panels' flattenings with the negotiated seams, side by side
-        let flats: Vec<Result<Flattening, PatternError>> = panels
-            .par_iter()
-            .map(|panel| {
-                let holds = seam_chains(panel, seams, &sewn, true);
-                flatten_held(panel, &holds, &opts.flatten).map_err(flatten_error(panel))
-            })
-            .collect();
+        // the panels' flattenings with the negotiated seams, side by side; a mirror pair's second
+        // panel the mirror image of its first's
+        let flats = flatten_pairs(&panels, (&second_of, plane), opts, |panel| {
+            let holds = seam_chains(panel, seams, &sewn, true);
+            flatten_held(panel, &holds, &opts.flatten).map_err(flatten_error(panel))
+        });
         for (i, ((panel, found_darts), flat)) in panels.iter().zip(found_darts).zip(flats).enumerate() {
             let flat = flat?;
             let d = distortion(&panel.positions, &panel.triangles, &flat.uv);
@@ -925,7 +943,7 @@ fn pass_darts(
     search: Search<'_>,
     cap: &[usize],
     searched: &mut [Option<(usize, Searched)>],
-    second_of: &[Option<usize>],
+    (second_of, plane): Pairs<'_>,
     barrier: &DartBarrier,
 ) -> Result<PassDarts, PatternError> {
     let find_darts = matches!(search, Search::Find(_));
@@ -935,7 +953,6 @@ fn pass_darts(
     // with negotiated seams, the search's last flattening is the free one the negotiation needs
     let mut free: Vec<Option<Trial>> = vec![None; panels.len()];
     if find_darts {
-        let plane = mirror_plane(t, positions);
         // the panels' searches are independent: side by side on rayon's pool (issue #15),
         // the first failure in panel order reported
         let fresh: Vec<(usize, Result<Searched, PatternError>)> = (0..panels.len())
@@ -969,7 +986,17 @@ fn pass_darts(
                 });
                 let done = match mirrored {
                     Some(darts) => {
-                        flatten_free(&panel, seams, &opts.flatten).map(|last| Searched { panel, darts, last })
+                        // the first's free flattening, mirrored, where the darted panels mirror exactly
+                        let tol = opts.mirror_flatten_tolerance_mm * 1e-3;
+                        let last =
+                            match (plane.and_then(|pl| mirror_map(&panels[first], &panel, pl, tol)), &free[first]) {
+                                (Some(map), Some(trial)) => Ok(Trial {
+                                    flat: mirrored_flattening(&trial.flat, &map),
+                                    distortion: trial.distortion,
+                                }),
+                                _ => flatten_free(&panel, seams, &opts.flatten),
+                            };
+                        last.map(|last| Searched { panel, darts, last })
                     }
                     None => {
                         // not a mirror image here (a scan): searched on its own
@@ -994,6 +1021,40 @@ fn pass_darts(
     Ok(PassDarts { panels, found_darts, free })
 }
 
+/// The template's mirror pairs among a pass's panels: per panel, the panel
+/// whose second it is (`None`: not a pair's second panel); and the body's
+/// mirror plane `n·p = d`, where it has one ([`mirror_plane`]).
+type Pairs<'a> = (&'a [Option<usize>], Option<(DVec3, f64)>);
+
+/// Every panel's flattening by `flat`, side by side; the second panel of a
+/// mirror pair the mirror image of its first's where the two panels mirror
+/// within [`PatternOptions::mirror_flatten_tolerance_mm`]
+/// ([`super::mirror`]), else its own.
+fn flatten_pairs<F>(
+    panels: &[Panel],
+    (second_of, plane): Pairs<'_>,
+    opts: &PatternOptions,
+    flat: F,
+) -> Vec<Result<Flattening, PatternError>>
+where
+    F: Fn(&Panel) -> Result<Flattening, PatternError> + Sync,
+{
+    let tol = opts.mirror_flatten_tolerance_mm * 1e-3;
+    let maps: Vec<Option<TiVec<PanelVertex, PanelVertex>>> =
+        panels.par_iter().enumerate().map(|(i, p)| mirror_map(&panels[second_of[i]?], p, plane?, tol)).collect();
+    let mut out: Vec<Option<Result<Flattening, PatternError>>> =
+        panels.par_iter().zip(&maps).map(|(p, m)| m.is_none().then(|| flat(p))).collect();
+    for (i, map) in maps.iter().enumerate() {
+        let Some(map) = map else { continue };
+        out[i] = Some(match second_of[i].and_then(|first| out[first].as_ref()) {
+            Some(Ok(first)) => Ok(mirrored_flattening(first, map)),
+            // the first failed (the pattern fails on it) or is itself mirrored (never: firsts are no seconds)
+            _ => flat(&panels[i]),
+        });
+    }
+    out.into_iter().zip(panels).map(|(f, p)| f.unwrap_or_else(|| flat(p))).collect()
+}
+
 /// The seam step of a pass: with [`PatternOptions::negotiate_seams`], each
 /// seam's sewn lengths negotiated between its sides from their free
 /// flattenings (`free`, where the dart search left them; else flattened
@@ -1005,16 +1066,18 @@ fn sewn_lengths(
     n_nodes: usize,
     opts: &PatternOptions,
     find_darts: bool,
+    pairs: Pairs<'_>,
 ) -> Result<SewnRatios, PatternError> {
     Ok(if opts.negotiate_seams {
         let free = if find_darts {
             free.into_iter().flatten().collect()
         } else {
-            panels
-                .par_iter()
-                .map(|p| flatten_free(p, seams, &opts.flatten))
-                .collect::<Vec<_>>()
+            flatten_pairs(panels, pairs, opts, |p| flatten_free(p, seams, &opts.flatten).map(|t| t.flat))
                 .into_iter()
+                .zip(panels)
+                .map(|(f, p)| {
+                    f.map(|flat| Trial { distortion: distortion(&p.positions, &p.triangles, &flat.uv), flat })
+                })
                 .collect::<Result<Vec<_>, _>>()?
         };
         negotiate(panels, &free, seams, n_nodes, opts.negotiation_power)
@@ -1070,19 +1133,26 @@ fn piece_report(
 
 /// The mid-sagittal plane of a garment, `(n, d)` with `n·p = d` on it, from
 /// the template's nodes tied to mirrored feature points
-/// (`thigh_left`/`thigh_right`): [`Plane::bisecting`] the pairs of points
-/// tied to one node each. Where no point is (a girth line split by extra
-/// ring nodes, nodes along a seam tied to the nearest point: the princess
-/// dress), the mean of each point's nodes is paired with the mean of its
-/// mirror point's (where both have as many), and then each node with the
-/// node of its mirror point nearest its image across that first plane:
-/// exact on a garment made symmetric (`refine::symmetry`), where the means
-/// alone were 0.6–0.8 mm off and a found dart's chain, mirrored by nearest
-/// vertices, did not follow the refined edges. `None` without such nodes.
+/// (`thigh_left`/`thigh_right`). A first estimate: [`Plane::bisecting`] the
+/// pairs of points tied to one node each, or, where no point is (a girth
+/// line split by extra ring nodes, nodes along a seam tied to the nearest
+/// point: the princess dress), the mean of each point's nodes paired with
+/// the mean of its mirror point's (where both have as many). Then, twice,
+/// every node on the left of the plane is paired with the node nearest its
+/// image across it, and the plane is bisected again from those pairs: exact
+/// on a garment made symmetric (`refine::symmetry`), where the first
+/// estimate alone was 0.6–0.8 mm off (the means; and the one-node points
+/// of the princess dress, whose mirror pair's panels then missed their
+/// vertex-for-vertex map, [`super::mirror`], by up to 0.78 mm), and a found
+/// dart's chain, mirrored by nearest vertices, did not follow the refined
+/// edges. `None` without such nodes.
 fn mirror_plane(t: &Template, positions: &TiSlice<VertexId, DVec3>) -> Option<(DVec3, f64)> {
     let mut groups: BTreeMap<String, Vec<DVec3>> = BTreeMap::new();
+    let mut nodes = Vec::with_capacity(t.nodes.len());
     for (i, n) in t.nodes.iter().enumerate() {
-        groups.entry(n.point.to_string()).or_default().push(*positions.get(node_vertex(i as u32))?);
+        let p = *positions.get(node_vertex(i as u32))?;
+        groups.entry(n.point.to_string()).or_default().push(p);
+        nodes.push(p);
     }
     let mirrored: Vec<(&Vec<DVec3>, &Vec<DVec3>)> = groups
         .iter()
@@ -1092,24 +1162,24 @@ fn mirror_plane(t: &Template, positions: &TiSlice<VertexId, DVec3>) -> Option<(D
         .collect();
     let unique: Vec<(DVec3, DVec3)> =
         mirrored.iter().filter(|(l, _)| l.len() == 1).map(|(l, r)| (l[0], r[0])).collect();
-    if let Some(p) = Plane::bisecting(&unique, None) {
-        return Some((p.normal, p.offset));
-    }
     let mean = |v: &[DVec3]| v.iter().sum::<DVec3>() / v.len() as f64;
     let means: Vec<(DVec3, DVec3)> = mirrored.iter().map(|(l, r)| (mean(l), mean(r))).collect();
-    let first = Plane::bisecting(&means, None)?;
-    let reflect = |p: DVec3| p - 2.0 * first.signed_distance(p) * first.normal;
-    let pairs: Vec<(DVec3, DVec3)> = mirrored
-        .iter()
-        .flat_map(|(l, r)| {
-            l.iter().filter_map(move |&p| {
+    let mut plane = Plane::bisecting(&unique, None).or_else(|| Plane::bisecting(&means, None))?;
+    for _ in 0..2 {
+        let reflect = |p: DVec3| p - 2.0 * plane.signed_distance(p) * plane.normal;
+        // a node on the plane is its own image: it says nothing of the plane's tilt
+        let pairs: Vec<(DVec3, DVec3)> = nodes
+            .iter()
+            .filter(|&&p| plane.signed_distance(p) > 0.0)
+            .filter_map(|&p| {
                 let m = reflect(p);
-                let q = r.iter().copied().min_by(|a, b| a.distance(m).total_cmp(&b.distance(m)))?;
-                Some((p, q))
+                let q = nodes.iter().copied().min_by(|a, b| a.distance(m).total_cmp(&b.distance(m)))?;
+                (plane.signed_distance(q) < 0.0).then_some((p, q))
             })
-        })
-        .collect();
-    Plane::bisecting(&pairs, None).map(|p| (p.normal, p.offset))
+            .collect();
+        plane = Plane::bisecting(&pairs, None).unwrap_or(plane);
+    }
+    Some((plane.normal, plane.offset))
 }
 
 /// What shapes the darts searched on `panel` ([`DartGuides`]): its grain

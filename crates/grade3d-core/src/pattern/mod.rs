@@ -2,7 +2,8 @@
 //! into panels along the seams ([`panels`]), flatten each ([`flatten`]),
 //! build pattern pieces with sew and cut lines, notches and grain
 //! ([`assemble`]), check their internal lines ([`lines`]) and their thread strain
-//! ([`fabric`]), grade them
+//! ([`fabric`]), flatten a mirror pair's second piece as the mirror image of its first
+//! ([`mirror`]), grade them
 //! across sizes ([`grade`]), true their nests at the corners ([`true_up`]) and export them ([`export`]).
 
 pub mod assemble;
@@ -13,6 +14,7 @@ pub mod flatten;
 pub mod garment;
 pub mod grade;
 pub mod lines;
+pub mod mirror;
 pub mod panels;
 pub mod piece;
 pub mod true_up;
