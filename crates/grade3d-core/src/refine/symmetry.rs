@@ -308,10 +308,13 @@ mod tests {
         assert!(symmetrize(&trousers(), &body, &positions, None, &opts).is_none(), "the body does not mirror");
     }
 
+    /// A grid's positions, triangles and cells.
+    type Grid = (Vec<DVec3>, TiVec<FaceId, [VertexId; 3]>, Vec<(i32, i32)>);
+
     /// A 5 × 3 grid 20 mm apart across the mid-sagittal plane `n·p = d`, the
     /// cells `nodes` (the "template nodes") first, the diagonals mirrored in
     /// the right half: the cells, their triangles, and the cell → vertex id.
-    fn grid(n: DVec3, d: f64, nodes: &[(i32, i32)]) -> (Vec<DVec3>, TiVec<FaceId, [VertexId; 3]>, Vec<(i32, i32)>) {
+    fn grid(n: DVec3, d: f64, nodes: &[(i32, i32)]) -> Grid {
         let mut cells: Vec<(i32, i32)> = nodes.to_vec();
         cells.extend((0..3).flat_map(|j| (0..5).map(move |i| (i, j))).filter(|c| !nodes.contains(c)));
         let id = |i: i32, j: i32| VertexId::from(cells.iter().position(|&c| c == (i, j)).unwrap());
@@ -337,7 +340,7 @@ mod tests {
         // pairs 2.2 mm apart), and on pop04 its centre-back node 27 was decoded 0.28 mm off the
         // plane, 0.55 mm from its own image (0.5 was the node tolerance)
         let mut body = reference_body().unwrap();
-        let ((n, d), _) = body_plane(&body).unwrap();
+        let ((n, _), _) = body_plane(&body).unwrap();
         let arm = body.points.keys().copied().find(|k| k.as_str() == "upper_arm_left").unwrap();
         body.points.get_mut(&arm).unwrap().position += n * 0.00072;
         let ((n, d), worst) = body_plane(&body).unwrap();
