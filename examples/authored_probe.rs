@@ -15,7 +15,7 @@
 //! probes that built-in template on its reference body instead; `LINES=1`
 //! prints each piece's internal lines and their problems.)
 //!
-//! The live shift dress: `TEMPLATE=live:shift-dress` draws it with `DOPTS`
+//! The live shift dress: `TEMPLATE=live:shift-dress` (or `live:t-shirt`) draws it with `DOPTS`
 //! (JSON `ShiftDressOptions`) and authors it with `GOPTS` (JSON overriding
 //! `drawn::garment_options()`), printing its drawn pieces flattened as they
 //! are and, for the design body, the graded surface's signed distance from
@@ -78,10 +78,15 @@ fn main() {
         uv: Vec::new(),
     };
     let t = match std::env::var("TEMPLATE") {
-        Ok(name) if name == "live:shift-dress" => {
-            // the dress drawn here with `DOPTS` (JSON ShiftDressOptions); `SURFACE=path` writes its OBJ
+        Ok(name) if name == "live:shift-dress" || name == "live:t-shirt" => {
+            // the dress drawn here with `DOPTS` (JSON ShiftDressOptions; TShirtOptions for the T-shirt);
+            // `SURFACE=path` writes its OBJ
             design = grade3d::template::library::reference_body().unwrap();
-            let pieces = live_pieces(&design, grade3d::template::drawn::shift_dress_surface);
+            let pieces = if name == "live:t-shirt" {
+                live_pieces(&design, grade3d::template::drawn::t_shirt_surface)
+            } else {
+                live_pieces(&design, grade3d::template::drawn::shift_dress_surface)
+            };
             if std::env::var("FLAT_ONLY").is_ok() {
                 return;
             }

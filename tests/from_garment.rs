@@ -487,15 +487,18 @@ fn a_skirt_from_curves_round_trips_and_grades() {
 }
 
 /// Issue #18 item 5: the styles drawn as curves on the reference body
-/// (`grade3d::template::drawn`): an A-line skirt and a sleeveless shift
-/// dress, plain and with princess seams.
+/// (`grade3d::template::drawn`): an A-line skirt, a sleeveless shift
+/// dress, plain and with princess seams, and a T-shirt with set-in sleeves.
 /// * Their fixtures (`fixtures/garments/*.curves.json`, route 2's input, and
 ///   `*.obj`, the sampled surface with one group a piece, route 1's) are
 ///   what the code writes (`cargo xtask data garments`).
 /// * Each, authored from its OBJ, round-trips on the reference body within
 ///   the bars, and has two pieces (front and back: the girths that shape a
 ///   piece are lines in it, not seams), the princess dress six (a centre
-///   and two sides, front and back).
+///   and two sides, front and back), the T-shirt those six and four sleeve
+///   pieces, each sleeve's cap sewn into its armhole (a seam between the
+///   sleeve's front piece and the bodice's front side piece, its back piece
+///   and the back side piece, on either arm), the sleeves mirror pairs.
 /// * The A-line skirt, graded on every fixture body and ASTM size with its
 ///   block's darts, passes the #7/#8 bars (`common/bars.rs`), its strain
 ///   held to an open ceiling ([`A_LINE_STRAIN_CEILING`]).
@@ -505,10 +508,27 @@ fn drawn_styles_round_trip_and_the_a_line_skirt_grades() {
     use grade3d::template::drawn;
     let body = grade3d::template::library::reference_body().unwrap();
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/garments");
-    let (a_line, dress, princess) =
-        (drawn::ALineOptions::default(), drawn::ShiftDressOptions::default(), drawn::ShiftDressOptions::princess());
+    let (a_line, dress, princess, tee) = (
+        drawn::ALineOptions::default(),
+        drawn::ShiftDressOptions::default(),
+        drawn::ShiftDressOptions::princess(),
+        drawn::TShirtOptions::default(),
+    );
     let two = ["front", "back"].as_slice();
     let six = ["front-left", "front", "front-right", "back-right", "back", "back-left"].as_slice();
+    let ten = [
+        "front-left",
+        "front",
+        "front-right",
+        "back-right",
+        "back",
+        "back-left",
+        "sleeve-left-front",
+        "sleeve-left-back",
+        "sleeve-right-front",
+        "sleeve-right-back",
+    ]
+    .as_slice();
     let styles = [
         (
             "a-line-skirt",
@@ -530,6 +550,13 @@ fn drawn_styles_round_trip_and_the_a_line_skirt_grades() {
             drawn::shift_dress_surface(&body, &princess).unwrap(),
             drawn::dress_garment_options(),
             six,
+        ),
+        (
+            "t-shirt",
+            drawn::t_shirt_curves(&body, &tee).unwrap(),
+            drawn::t_shirt_surface(&body, &tee).unwrap(),
+            drawn::dress_garment_options(),
+            ten,
         ),
     ];
     let design = obstacle(&body.mesh);
@@ -560,6 +587,27 @@ fn drawn_styles_round_trip_and_the_a_line_skirt_grades() {
         }
         for (mean, p95) in [to_design, to_graded] {
             assert!(mean <= ROUND_TRIP_MEAN_MM && p95 <= ROUND_TRIP_P95_MM, "{name}: {mean} {p95}");
+        }
+        if name == "t-shirt" {
+            let t = &a.template;
+            let sewn = |p: &str, q: &str| {
+                t.seams.iter().any(|s| [&s.panel_a, &s.panel_b] == [p, q] || [&s.panel_a, &s.panel_b] == [q, p])
+            };
+            for (sleeve, bodice) in [
+                ("sleeve-left-front", "front-left"),
+                ("sleeve-left-back", "back-left"),
+                ("sleeve-right-front", "front-right"),
+                ("sleeve-right-back", "back-right"),
+            ] {
+                assert!(sewn(sleeve, bodice), "t-shirt: {sleeve} is not sewn into {bodice}");
+            }
+            for pair in [["sleeve-left-front", "sleeve-right-front"], ["sleeve-left-back", "sleeve-right-back"]] {
+                assert!(
+                    t.mirror_pairs.iter().any(|m| m == &pair.map(String::from)),
+                    "t-shirt: {pair:?} not a mirror pair: {:?}",
+                    t.mirror_pairs
+                );
+            }
         }
         if name == "a-line-skirt" {
             assert!(a.girths.contains_key("hip"), "{:?}", a.girths);
@@ -596,10 +644,8 @@ fn drawn_styles_round_trip_and_the_a_line_skirt_grades() {
 
 /// Grades `t` on every fixture body and ASTM size (mirror-symmetric) with
 /// its block's darts (`plan`) and checks the bars of issues #7 and #8
-/// ([`bars::Bars::check`]), its strain held to `ceiling`: what fails.
-/// The bars every grade of `t` (with the block's dart `plan`) misses on the
-/// 8 fixture bodies and the 12 ASTM sizes, and the worst sew-line
-/// difference of its mirror pairs there (mm, all symmetric bodies).
+/// ([`bars::Bars::check`]), its strain held to `ceiling`: what fails, and
+/// the worst sew-line difference of its mirror pairs there (mm).
 fn fixture_bar_failures(
     t: &Template,
     plan: &grade3d::pattern::garment::DartPlan,

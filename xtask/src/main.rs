@@ -138,6 +138,12 @@ fn run(what: DataCommand) -> Result<(), Box<dyn std::error::Error>> {
                     drawn::shift_dress_curves(&body, &drawn::ShiftDressOptions::princess())?,
                     drawn::shift_dress_surface(&body, &drawn::ShiftDressOptions::princess())?,
                 ),
+                // the T-shirt: the princess bodice cut at the hip, set-in sleeves sewn into its armholes
+                (
+                    "t-shirt",
+                    drawn::t_shirt_curves(&body, &drawn::TShirtOptions::default())?,
+                    drawn::t_shirt_surface(&body, &drawn::TShirtOptions::default())?,
+                ),
             ];
             for (name, curves, pieces) in styles {
                 let path = dir.join(format!("{name}.curves.json"));

@@ -23,7 +23,9 @@
 //!   girths that shape a piece are lines within it, not seams.
 //! * **Sleeves** ([`sleeve_curves`]) are tubes between two eased loops in
 //!   their own planes (the armscye, the upper-arm girth), each split at its
-//!   lowest and highest points into a front and a back half.
+//!   lowest and highest points into a front and a back half. A T-shirt's
+//!   ([`t_shirt_curves`]) are set in: their caps are the bodice's armholes
+//!   themselves, so each is sewn into its armhole point for point.
 //! * **Held off the body** ([`hold_off`]): where a patch's interpolation
 //!   between its curves passes closer to the body than a clearance (a
 //!   shift dress's upper chest, between the chest line and the neckline),
@@ -933,9 +935,18 @@ fn drape_above(pieces: &mut [PanelMesh], form: &Form, above: &Plane, (iterations
 /// # Errors
 /// [`shift_dress_curves`]'s; [`AuthorError::Curves`].
 pub fn shift_dress_surface(body: &FeatureBody, o: &ShiftDressOptions) -> Result<Vec<PanelMesh>, AuthorError> {
-    let mut pieces = panels_from_curves(&shift_dress_curves(body, o)?, &o.curves)?;
-    // one form for holding off and draping (its index and winding tree built once)
-    let form = Form::new(body);
+    dress_surface(body, &shift_dress_curves(body, o)?, o, &Form::new(body))
+}
+
+/// The surface of the dress drawn as `curves` ([`shift_dress_curves`]):
+/// sampled, held off `form`'s body, the shoulders draped.
+fn dress_surface(
+    body: &FeatureBody,
+    curves: &[CurvePanel],
+    o: &ShiftDressOptions,
+    form: &Form,
+) -> Result<Vec<PanelMesh>, AuthorError> {
+    let mut pieces = panels_from_curves(curves, &o.curves)?;
     form.hold_off(&mut pieces, o.clearance_mm * MM);
     // the shoulders draped from the eased bust line up (the chest line is not a declared ease:
     // held, its corners with the armholes fold)
@@ -944,7 +955,7 @@ pub fn shift_dress_surface(body: &FeatureBody, o: &ShiftDressOptions) -> Result<
     let plane = girth::girth_plane(body, CurveId::Bust).ok_or_else(|| missing("bust"))?;
     let normal = if plane.normal.dot(d.up) >= 0.0 { plane.normal } else { -plane.normal };
     let above = Plane::from_point_normal(bust.centre, normal).ok_or_else(|| missing("bust"))?;
-    drape_above(&mut pieces, &form, &above, (o.drape_iterations, o.drape_ramp_mm * MM), o.clearance_mm * MM);
+    drape_above(&mut pieces, form, &above, (o.drape_iterations, o.drape_ramp_mm * MM), o.clearance_mm * MM);
     Ok(pieces)
 }
 
@@ -1069,9 +1080,125 @@ pub fn sleeves_surface(body: &FeatureBody, o: &SleeveOptions) -> Result<Vec<Pane
     Ok(pieces)
 }
 
+/// Knobs of the T-shirt ([`t_shirt_curves`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct TShirtOptions {
+    /// The body: the shift dress's drawing cut short. Default
+    /// [`ShiftDressOptions::princess`] with its hem 50 mm below the hip
+    /// line and no flare.
+    pub bodice: ShiftDressOptions,
+    /// The sleeves' hems ([`SleeveOptions::hem_ease_mm`]), points and
+    /// sampling; their caps are the bodice's armholes and they are held off
+    /// by the bodice's clearance (their `armhole_ease_mm` and
+    /// `clearance_mm` are not read: a cap held off by another clearance
+    /// would leave its armhole).
+    pub sleeves: SleeveOptions,
+}
+
+impl Default for TShirtOptions {
+    fn default() -> Self {
+        Self {
+            bodice: ShiftDressOptions { length_below_hip_m: 0.05, hem_flare_mm: 0.0, ..ShiftDressOptions::princess() },
+            sleeves: SleeveOptions::default(),
+        }
+    }
+}
+
+/// A T-shirt with set-in sleeves drawn as curves (issue #18, item 5): the
+/// shift dress's bodice ([`shift_dress_curves`] with
+/// [`TShirtOptions::bodice`]) and on each arm a short sleeve in a front and
+/// a back piece, each the Coons patch from the upper-arm girth's eased half
+/// ([`loop_halves`], as [`sleeve_curves`]) up to the bodice's armhole on
+/// that side — the cap *is* the armhole curve, from the underarm point to
+/// the shoulder point, so the sleeve is sewn into it point for point —,
+/// the underarm seam and the seam over the arm straight between the ends.
+///
+/// # Errors
+/// [`shift_dress_curves`]'s; [`AuthorError::Missing`]: an upper-arm girth
+/// the body lacks, or an armhole the bodice did not draw.
+pub fn t_shirt_curves(body: &FeatureBody, o: &TShirtOptions) -> Result<Vec<CurvePanel>, AuthorError> {
+    let mut panels = shift_dress_curves(body, &o.bodice)?;
+    let d = Drawing::new(body)?;
+    let n = o.sleeves.arc_points.max(2);
+    let armhole = |name: &str, left: bool| -> Result<Vec<[f64; 3]>, AuthorError> {
+        let p = panels.iter().find(|p| p.name == name).ok_or_else(|| missing(name))?;
+        Ok(if left { p.left.clone() } else { p.right.clone() })
+    };
+    // the armholes, underarm to shoulder: the front's on the body's left is its first shoulder
+    // patch's left side, the back's on the body's left its last shoulder patch's right side
+    let holes = [
+        ("left", CurveId::UpperArmLeft, [armhole("front-shoulder-left", true)?, armhole("back-shoulder-left", false)?]),
+        (
+            "right",
+            CurveId::UpperArmRight,
+            [armhole("front-shoulder-right", false)?, armhole("back-shoulder-right", true)?],
+        ),
+    ];
+    for (side, upper, caps) in holes {
+        let hem = loop_halves(&d, upper, o.sleeves.hem_ease_mm, n)?;
+        for (k, half) in ["front", "back"].into_iter().enumerate() {
+            let (b, t) = (&hem[k], &caps[k]);
+            let (b0, b1, t0, t1) = (b[0], b[b.len() - 1], t[0], t[t.len() - 1]);
+            panels.push(CurvePanel {
+                name: format!("sleeve-{side}-{half}"),
+                bottom: b.clone(),
+                top: t.clone(),
+                left: vec![b0, t0],
+                right: vec![b1, t1],
+                piece: None,
+            });
+        }
+    }
+    Ok(panels)
+}
+
+/// The T-shirt's garment surface: the bodice as the shift dress's
+/// ([`shift_dress_surface`]: sampled, held off, its shoulders draped with
+/// the armholes fixed) and the sleeves sampled and held off the same body
+/// by the same clearance.
+/// A point is held off by its position alone, so each cap stays on its
+/// armhole.
+///
+/// # Errors
+/// [`t_shirt_curves`]'s; [`AuthorError::Curves`].
+pub fn t_shirt_surface(body: &FeatureBody, o: &TShirtOptions) -> Result<Vec<PanelMesh>, AuthorError> {
+    let curves = t_shirt_curves(body, o)?;
+    let (sleeves, bodice): (Vec<CurvePanel>, Vec<CurvePanel>) =
+        curves.into_iter().partition(|p| p.name.starts_with("sleeve-"));
+    let form = Form::new(body);
+    let mut pieces = dress_surface(body, &bodice, &o.bodice, &form)?;
+    let mut arms = panels_from_curves(&sleeves, &o.sleeves.curves)?;
+    form.hold_off(&mut arms, o.bodice.clearance_mm * MM);
+    pieces.extend(arms);
+    Ok(pieces)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_t_shirt_s_sleeve_caps_are_its_armholes_point_for_point() {
+        let body = crate::template::library::reference_body().unwrap();
+        let o = TShirtOptions::default();
+        let curves = t_shirt_curves(&body, &o).unwrap();
+        // the princess bodice's 30 patches and four sleeve pieces
+        assert_eq!(curves.len(), 34);
+        let by = |n: &str| curves.iter().find(|p| p.name == n).unwrap();
+        assert_eq!(by("sleeve-left-front").top, by("front-shoulder-left").left);
+        assert_eq!(by("sleeve-left-back").top, by("back-shoulder-left").right);
+        assert_eq!(by("sleeve-right-front").top, by("front-shoulder-right").right);
+        assert_eq!(by("sleeve-right-back").top, by("back-shoulder-right").left);
+        // on the surface each cap's points (the patch's 12 intervals: 13) are bodice points, to the bit
+        let pieces = t_shirt_surface(&body, &o).unwrap();
+        let bodice: Vec<DVec3> =
+            pieces.iter().filter(|p| !p.name.starts_with("sleeve-")).flat_map(|p| p.positions.clone()).collect();
+        for sleeve in pieces.iter().filter(|p| p.name.starts_with("sleeve-")) {
+            let on = sleeve.positions.iter().filter(|q| bodice.iter().any(|b| b.distance(**q) < 1e-12)).count();
+            assert_eq!(on, o.sleeves.curves.samples + 1, "{}", sleeve.name);
+        }
+    }
 
     #[test]
     fn a_shift_is_drawn_in_bands_and_columns() {
