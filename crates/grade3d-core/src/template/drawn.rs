@@ -1053,20 +1053,28 @@ pub fn sleeve_curves(body: &FeatureBody, o: &SleeveOptions) -> Result<Vec<CurveP
     ] {
         let top = loop_halves(&d, armscye, o.armhole_ease_mm, n)?;
         let hem = loop_halves(&d, upper, o.hem_ease_mm, n)?;
-        for (k, half) in ["front", "back"].into_iter().enumerate() {
-            let (b, t) = (&hem[k], &top[k]);
-            let (b0, b1, t0, t1) = (b[0], b[b.len() - 1], t[0], t[t.len() - 1]);
-            panels.push(CurvePanel {
-                name: format!("sleeve-{side}-{half}"),
-                bottom: b.clone(),
-                top: t.clone(),
-                left: vec![b0, t0],
-                right: vec![b1, t1],
-                piece: None,
-            });
-        }
+        panels.extend(sleeve_pieces(side, &hem, &top));
     }
     Ok(panels)
+}
+
+/// The front and back pieces of the sleeve on `side`: each the Coons patch
+/// from its `hem` half (bottom) up to its `cap` half (top), both from the
+/// underarm to the top of the arm, the underarm seam and the seam over the
+/// arm straight between their ends.
+fn sleeve_pieces(side: &str, hem: &[Vec<[f64; 3]>; 2], cap: &[Vec<[f64; 3]>; 2]) -> Vec<CurvePanel> {
+    ["front", "back"]
+        .into_iter()
+        .zip(hem.iter().zip(cap))
+        .map(|(half, (b, t))| CurvePanel {
+            name: format!("sleeve-{side}-{half}"),
+            bottom: b.clone(),
+            top: t.clone(),
+            left: vec![b[0], t[0]],
+            right: vec![b[b.len() - 1], t[t.len() - 1]],
+            piece: None,
+        })
+        .collect()
 }
 
 /// The sleeves' garment surface: [`sleeve_curves`] sampled, one mesh per
@@ -1137,18 +1145,7 @@ pub fn t_shirt_curves(body: &FeatureBody, o: &TShirtOptions) -> Result<Vec<Curve
     ];
     for (side, upper, caps) in holes {
         let hem = loop_halves(&d, upper, o.sleeves.hem_ease_mm, n)?;
-        for (k, half) in ["front", "back"].into_iter().enumerate() {
-            let (b, t) = (&hem[k], &caps[k]);
-            let (b0, b1, t0, t1) = (b[0], b[b.len() - 1], t[0], t[t.len() - 1]);
-            panels.push(CurvePanel {
-                name: format!("sleeve-{side}-{half}"),
-                bottom: b.clone(),
-                top: t.clone(),
-                left: vec![b0, t0],
-                right: vec![b1, t1],
-                piece: None,
-            });
-        }
+        panels.extend(sleeve_pieces(side, &hem, &caps));
     }
     Ok(panels)
 }
