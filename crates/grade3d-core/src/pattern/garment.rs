@@ -825,10 +825,16 @@ fn pattern_once(
         let mut refused = false;
         // the panels' flattenings with the negotiated seams, side by side; a mirror pair's second
         // panel the mirror image of its first's
-        let flats = flatten_pairs(&panels, (&second_of, plane), opts, |panel| {
-            let holds = seam_chains(panel, seams, &sewn, true);
-            flatten_held(panel, &holds, &opts.flatten).map_err(flatten_error(panel))
-        });
+        let flats = flatten_pairs(
+            &panels,
+            (&second_of, plane),
+            opts,
+            |panel| {
+                let holds = seam_chains(panel, seams, &sewn, true);
+                flatten_held(panel, &holds, &opts.flatten).map_err(flatten_error(panel))
+            },
+            mirrored_flattening,
+        );
         for (i, ((panel, found_darts), flat)) in panels.iter().zip(found_darts).zip(flats).enumerate() {
             let flat = flat?;
             let d = distortion(&panel.positions, &panel.triangles, &flat.uv);
@@ -987,15 +993,10 @@ fn pass_darts(
                 let done = match mirrored {
                     Some(darts) => {
                         // the first's free flattening, mirrored, where the darted panels mirror exactly
-                        let tol = opts.mirror_flatten_tolerance_mm * 1e-3;
-                        let last =
-                            match (plane.and_then(|pl| mirror_map(&panels[first], &panel, pl, tol)), &free[first]) {
-                                (Some(map), Some(trial)) => Ok(Trial {
-                                    flat: mirrored_flattening(&trial.flat, &map),
-                                    distortion: trial.distortion,
-                                }),
-                                _ => flatten_free(&panel, seams, &opts.flatten),
-                            };
+                        let last = match (pair_map(&panels[first], &panel, plane, opts), &free[first]) {
+                            (Some(map), Some(trial)) => Ok(mirrored_trial(trial, &map)),
+                            _ => flatten_free(&panel, seams, &opts.flatten),
+                        };
                         last.map(|last| Searched { panel, darts, last })
                     }
                     None => {
@@ -1026,33 +1027,61 @@ fn pass_darts(
 /// mirror plane `n·p = d`, where it has one ([`mirror_plane`]).
 type Pairs<'a> = (&'a [Option<usize>], Option<(DVec3, f64)>);
 
+/// The vertex map of `second` onto `first`, a template mirror pair's
+/// panels, where they mirror across `plane` within
+/// [`PatternOptions::mirror_flatten_tolerance_mm`] ([`mirror_map`]).
+fn pair_map(
+    first: &Panel,
+    second: &Panel,
+    plane: Option<(DVec3, f64)>,
+    opts: &PatternOptions,
+) -> Option<TiVec<PanelVertex, PanelVertex>> {
+    mirror_map(first, second, plane?, opts.mirror_flatten_tolerance_mm * 1e-3)
+}
+
+/// A mirror pair's first panel's flattening and distortion as its second's
+/// ([`mirrored_flattening`]: the distortion of a mirror image is the same).
+fn mirrored_trial(first: &Trial, map: &TiVec<PanelVertex, PanelVertex>) -> Trial {
+    Trial { flat: mirrored_flattening(&first.flat, map), distortion: first.distortion }
+}
+
 /// Every panel's flattening by `flat`, side by side; the second panel of a
-/// mirror pair the mirror image of its first's where the two panels mirror
-/// within [`PatternOptions::mirror_flatten_tolerance_mm`]
-/// ([`super::mirror`]), else its own.
-fn flatten_pairs<F>(
+/// mirror pair its first's, mirrored by `mirror`, where the two panels
+/// mirror ([`pair_map`]), else its own (also where its first's failed: the
+/// pattern fails on the first, in panel order).
+fn flatten_pairs<T, F, M>(
     panels: &[Panel],
     (second_of, plane): Pairs<'_>,
     opts: &PatternOptions,
     flat: F,
-) -> Vec<Result<Flattening, PatternError>>
+    mirror: M,
+) -> Vec<Result<T, PatternError>>
 where
-    F: Fn(&Panel) -> Result<Flattening, PatternError> + Sync,
+    T: Send,
+    F: Fn(&Panel) -> Result<T, PatternError> + Sync,
+    M: Fn(&T, &TiVec<PanelVertex, PanelVertex>) -> T,
 {
-    let tol = opts.mirror_flatten_tolerance_mm * 1e-3;
     let maps: Vec<Option<TiVec<PanelVertex, PanelVertex>>> =
-        panels.par_iter().enumerate().map(|(i, p)| mirror_map(&panels[second_of[i]?], p, plane?, tol)).collect();
-    let mut out: Vec<Option<Result<Flattening, PatternError>>> =
+        panels.par_iter().enumerate().map(|(i, p)| pair_map(&panels[second_of[i]?], p, plane, opts)).collect();
+    let own: Vec<Option<Result<T, PatternError>>> =
         panels.par_iter().zip(&maps).map(|(p, m)| m.is_none().then(|| flat(p))).collect();
-    for (i, map) in maps.iter().enumerate() {
-        let Some(map) = map else { continue };
-        out[i] = Some(match second_of[i].and_then(|first| out[first].as_ref()) {
-            Some(Ok(first)) => Ok(mirrored_flattening(first, map)),
-            // the first failed (the pattern fails on it) or is itself mirrored (never: firsts are no seconds)
-            _ => flat(&panels[i]),
-        });
-    }
-    out.into_iter().zip(panels).map(|(f, p)| f.unwrap_or_else(|| flat(p))).collect()
+    let mirrored: Vec<Option<T>> = maps
+        .iter()
+        .zip(second_of)
+        .map(|(map, first)| match (map, own[(*first)?].as_ref()) {
+            (Some(map), Some(Ok(first))) => Some(mirror(first, map)),
+            _ => None,
+        })
+        .collect();
+    own.into_iter()
+        .zip(mirrored)
+        .zip(panels)
+        .map(|((own, mirrored), p)| match (mirrored, own) {
+            (Some(m), _) => Ok(m),
+            (None, Some(own)) => own,
+            (None, None) => flat(p),
+        })
+        .collect()
 }
 
 /// The seam step of a pass: with [`PatternOptions::negotiate_seams`], each
@@ -1072,12 +1101,8 @@ fn sewn_lengths(
         let free = if find_darts {
             free.into_iter().flatten().collect()
         } else {
-            flatten_pairs(panels, pairs, opts, |p| flatten_free(p, seams, &opts.flatten).map(|t| t.flat))
+            flatten_pairs(panels, pairs, opts, |p| flatten_free(p, seams, &opts.flatten), mirrored_trial)
                 .into_iter()
-                .zip(panels)
-                .map(|(f, p)| {
-                    f.map(|flat| Trial { distortion: distortion(&p.positions, &p.triangles, &flat.uv), flat })
-                })
                 .collect::<Result<Vec<_>, _>>()?
         };
         negotiate(panels, &free, seams, n_nodes, opts.negotiation_power)

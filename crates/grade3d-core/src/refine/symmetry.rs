@@ -29,7 +29,7 @@
 //! mirror-symmetric body mirrors its partner to rounding, but a node meant
 //! to lie on the plane came 0.26–0.28 mm off it on two population bodies,
 //! so 0.55 mm from its own image — the princess dress's centre-back node 27
-//! on pop04 and pop36, which held 0.5 mm left those grades unsymmetrised),
+//! on pop04 and pop39, which held 0.5 mm left those grades unsymmetrised),
 //! and a mirror map of the
 //! mesh sends a triangle `(a, b, c)` to the one holding the reversed edge
 //! `(m(b), m(a))`, whose third corner is `m(c)`; the map spreads from
