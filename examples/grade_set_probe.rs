@@ -35,7 +35,14 @@ fn main() {
         _ => MeasurementId::HipGirth,
     };
     let chart = parse_csv(&std::fs::read_to_string(&chart_path).unwrap(), &SizeChartOptions::default()).unwrap();
-    let t = builtin().unwrap().into_iter().find(|t| t.name.contains(which.as_str())).unwrap();
+    // `live:shift-dress`: the princess dress authored here, as the library would hold it
+    let t = if which == "live:shift-dress" {
+        let design = grade3d::template::library::reference_body().unwrap();
+        grade3d::template::drawn::shift_dress(&design, &grade3d::template::drawn::ShiftDressOptions::princess())
+            .unwrap()
+    } else {
+        builtin().unwrap().into_iter().find(|t| t.name.contains(which.as_str())).unwrap()
+    };
     let gpu = GpuContext::new().unwrap();
     let model = BodyModel::embedded().unwrap();
     let fit_opts = FitOptions::for_sex(chart.sex);
@@ -158,6 +165,10 @@ fn main() {
         }
     }
     let nest = nests(&sizes).unwrap();
+    // NEST_SVG=path: the trued nest drawn
+    if let Ok(path) = std::env::var("NEST_SVG") {
+        std::fs::write(path, grade3d::pattern::export::svg::nest_svg(&t.name, &nest, &Default::default())).unwrap();
+    }
     for (piece, all) in &nest {
         let widths: Vec<String> = all
             .iter()

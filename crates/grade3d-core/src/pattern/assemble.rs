@@ -10,7 +10,8 @@
 //! garment's outside, where the template's faces are counter-clockwise),
 //! rotated so that the template's grain line `from → to` points along `−y`
 //! (grain lines run down the body, so the piece is upright) and translated
-//! so that the grain line's `from` node — the **stack point** — is the origin.
+//! so that the grain line's stack node (`GrainLine::stack`, else its `from`
+//! node) — the **stack point** — is the origin.
 //!
 //! **Sew line** — the panel's outline, with each dart closed (straight across
 //! its opening; the legs become an internal line). **Corners** (turn points) — template
@@ -170,6 +171,7 @@ pub fn assemble(
     let node_local =
         |node: u32| panel.local(node_vertex(node)).ok_or(PieceError::GrainOffPanel { panel: name(), node });
     let (from, to) = (node_local(template_panel.grain.from)?, node_local(template_panel.grain.to)?);
+    let stack = node_local(template_panel.grain.stack_node())?;
     let mut pts: TiVec<PanelVertex, DVec2> = uv.iter().map(|p| *p * MM_PER_M).collect();
     let rim = panel.rim();
     let outline_pts: Vec<DVec2> = rim.iter().map(|&l| pts[l]).collect();
@@ -182,7 +184,7 @@ pub fn assemble(
     }
     // rotate grain onto −y: angle of grain to angle −π/2
     let rot = DVec2::from_angle(-std::f64::consts::FRAC_PI_2 - grain.y.atan2(grain.x));
-    let origin = pts[from];
+    let origin = pts[stack];
     let pts: TiVec<PanelVertex, DVec2> = pts.iter().map(|&p| rot.rotate(p - origin)).collect();
 
     let sew_line: Vec<DVec2> = rim.iter().map(|&l| pts[l]).collect();
@@ -264,7 +266,7 @@ pub fn assemble(
         cut_line,
         seam_allowance_mm: allowance,
         notches,
-        grain: [DVec2::ZERO, DVec2::new(0.0, -grain_len)],
+        grain: [pts[from], pts[from] + DVec2::new(0.0, -grain_len)],
         internal_lines,
         grade_points,
         stack_point: DVec2::ZERO,

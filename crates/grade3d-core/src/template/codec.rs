@@ -99,6 +99,9 @@ pub struct DraftPanel {
     pub triangles: Vec<usize>,
     /// Grain line `(from node, to node)`.
     pub grain: (u32, u32),
+    /// The stack point's node, where it is not `grain.0` ([`GrainLine::stack`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stack: Option<u32>,
     /// Pieces to cut.
     pub quantity: u32,
 }
@@ -256,7 +259,7 @@ pub fn encode(draft: &Draft, body: &FeatureBody) -> Result<Template, CodecError>
         .map(|p| Panel {
             name: p.name.clone(),
             faces: p.triangles.iter().map(|&t| t as u32).collect(),
-            grain: GrainLine { from: p.grain.0, to: p.grain.1 },
+            grain: GrainLine { from: p.grain.0, to: p.grain.1, stack: p.stack.filter(|&s| s != p.grain.0) },
             quantity: p.quantity,
         })
         .collect();

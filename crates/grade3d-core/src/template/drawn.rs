@@ -376,6 +376,7 @@ pub fn dress_garment_options() -> GarmentOptions {
         mirror_halves: true,
         one_node_a_corner: true,
         bracketed_lofts: true,
+        stack_on_girth_line: true,
         flips: crate::geom::flip::FlipOptions { cap_angle_deg: 170.0, ..Default::default() },
         ..garment_options()
     }

@@ -90,7 +90,8 @@ pub struct Face {
     pub directions: [i8; 3],
 }
 
-/// A grain line: from one node towards another (on the reference body).
+/// A grain line: from one node towards another (on the reference body),
+/// and the piece's stack point.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GrainLine {
@@ -98,6 +99,20 @@ pub struct GrainLine {
     pub from: u32,
     /// Node at its end.
     pub to: u32,
+    /// The piece's stack point: the node a graded nest stacks its sizes at
+    /// (`crate::pattern::assemble` places it at the origin). Absent: `from`.
+    /// A pattern maker grades a piece out from a point inside it, on the
+    /// waist, hip or bust line; the grain arrow runs the piece's length,
+    /// so that its direction is read over a long span.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stack: Option<u32>,
+}
+
+impl GrainLine {
+    /// The stack point's node: [`Self::stack`], else [`Self::from`].
+    pub fn stack_node(&self) -> u32 {
+        self.stack.unwrap_or(self.from)
+    }
 }
 
 /// A pattern piece.
@@ -762,6 +777,12 @@ impl Template {
                     reason: "needs two distinct existing nodes".into(),
                 });
             }
+            if p.grain.stack.is_some_and(|s| s >= nn) {
+                return Err(TemplateError::BadReference {
+                    element: format!("panel `{}` grain line", p.name),
+                    reason: "its stack point is not an existing node".into(),
+                });
+            }
         }
         if let Some(f) = (0..self.faces.len() as u32).find(|f| !owner.contains_key(f)) {
             return Err(TemplateError::BadReference {
@@ -950,7 +971,7 @@ mod tests {
             panels: vec![Panel {
                 name: "front".into(),
                 faces: vec![0],
-                grain: GrainLine { from: 0, to: 2 },
+                grain: GrainLine { from: 0, to: 2, stack: None },
                 quantity: 1,
             }],
             seams: vec![],

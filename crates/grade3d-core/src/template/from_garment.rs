@@ -78,6 +78,8 @@
 //!    on the surface ([`uv_grain`]; a piece cut from it has its grain) —,
 //!    else along the body's vertical ([`GarmentOptions::grain_from_uv`];
 //!    [`Authored::grains`] says which, and how far the pair runs from it);
+//!    with [`GarmentOptions::stack_on_girth_line`], its stack point the
+//!    piece's node on a girth line nearest its middle (`grain`);
 //!    seams as the template edges two pieces
 //!    share ([`super::garment_panels::weld_panels`] on the coarse pieces);
 //!    a notch where a girth line crosses a seam; a pair of pieces whose
@@ -296,6 +298,21 @@ pub struct GarmentOptions {
     /// `female-slim-short-asian`, measured). The shift dress sets it
     /// ([`super::drawn::dress_garment_options`]).
     pub bracketed_lofts: bool,
+    /// Stack each piece at its node on a girth line nearest its middle
+    /// ([`super::format::GrainLine::stack`]; method, step 7), as a pattern
+    /// maker grades a piece out from a point inside it; false: at its grain
+    /// line's upper end. Default false: the A-line skirt, whose grain's upper
+    /// end lies on its waist 30 mm from the centre front, stacked at its hip
+    /// line's centre front instead has one front hem point's steps vary by
+    /// 2.03 mm on the ASTM sizes where 2.00 is allowed, and its side-waist
+    /// corner of sizes 38 and 40 of the men's chart touch 0.01 mm apart
+    /// (measured). The shift dress sets it
+    /// ([`super::drawn::dress_garment_options`]): stacked at the upper end of
+    /// a grain down its princess seam, its side pieces' princess seams of
+    /// consecutive sizes crossed, 181–196 of their 488 sew-line points
+    /// outside the next size on the women's chart; stacked on the hip line,
+    /// 38–62.
+    pub stack_on_girth_line: bool,
     /// Place the nodes of the garment's armholes (outline loops nearest an
     /// armscye) along the body's armscyes ([`OnCurve`]; method, step 8);
     /// false: by Eq. (1), tied to the shoulder or armpit point, whose frame
@@ -332,6 +349,7 @@ impl Default for GarmentOptions {
             ease_at: Vec::new(),
             grain_from_uv: true,
             bracketed_lofts: false,
+            stack_on_girth_line: false,
             armholes_along_armscye: true,
         }
     }
@@ -1091,18 +1109,24 @@ pub fn author_from_garment(
             .max_by_key(|(n, _)| n.len())
             .map_or((GrainSource::Vertical, ax.up), |(_, &g)| (GrainSource::Uv, g))
     };
+    // the nodes on girth lines: a piece's stack point is one of them where it has any
+    let on_girth_line: BTreeSet<u32> = if opts.stack_on_girth_line {
+        nodes.ties.iter().filter(|(_, t)| t.is_some()).filter_map(|(v, _)| node_of.get(v).copied()).collect()
+    } else {
+        BTreeSet::new()
+    };
     let mut grains = BTreeMap::new();
     let panels: Vec<DraftPanel> = kept_names
         .iter()
         .zip(&piece_triangles)
         .map(|(n, tris)| {
             let (source, direction) = asked(n);
-            let pair = grain(tris, &triangles, &positions, direction);
+            let (pair, stack) = grain(tris, &triangles, &positions, direction, &on_girth_line);
             let along = (positions[pair.1 as usize] - positions[pair.0 as usize]).normalize_or_zero();
             // a grain line has no sense
             let deviation_deg = along.dot(direction).abs().min(1.0).acos().to_degrees();
             grains.insert(n.clone(), GrainFound { source, deviation_deg });
-            DraftPanel { name: n.clone(), triangles: tris.clone(), grain: pair, quantity: 1 }
+            DraftPanel { name: n.clone(), triangles: tris.clone(), grain: pair, stack, quantity: 1 }
         })
         .collect();
     let mirror_pairs: Vec<[String; 2]> =
@@ -2426,11 +2450,44 @@ pub fn uv_grain(piece: &PanelMesh) -> Option<DVec3> {
 
 /// The grain: the pair of a piece's nodes running most nearly along
 /// `direction` (unit: the body's vertical, or the file's grain), long and
-/// near the piece's middle.
-fn grain(tris: &[usize], triangles: &[[u32; 3]], positions: &[DVec3], direction: DVec3) -> (u32, u32) {
+/// near the piece's middle, scored `rise − 4·lateral − off` (upper `a` over
+/// lower `b`: `rise` the drop from `a` to `b` along `direction`, `lateral`
+/// the rest of `a − b`, `off` the pair's midpoint's distance from the
+/// middle across `direction`); and the piece's stack point, where a graded
+/// nest stacks its sizes ([`GrainLine::stack`]).
+///
+/// The stack point is the piece's node on a girth line (`on_girth_line`:
+/// empty unless [`GarmentOptions::stack_on_girth_line`]) nearest its
+/// middle (the centroid of its nodes); without one, the grain's upper end.
+/// A pattern maker grades a piece out from a reference point inside it, on
+/// the waist, hip or bust line, as the straight skirt stacks at its hip.
+/// Stacked at the grain's upper end, on the piece's edge, that edge stays
+/// put in every size: the princess dress's side piece, whose grain runs
+/// down its princess seam, had 181–196 of its 488 sew-line points outside
+/// the next size on the women's chart (its curve over the bust grows with
+/// the size), and 36 of its 270 grade points stepped unevenly; stacked on
+/// its hip line, 38–62 points and 13 grade points (measured; the lines
+/// still cross 8–12 times a step, at its armhole). The grain arrow keeps
+/// the piece's whole length: run from the stack point down to the hem
+/// (half the length), the piece turned by up to 1° more between sizes, its
+/// shoulder swinging 15 mm on the men's chart.
+///
+/// [`GrainLine::stack`]: super::format::GrainLine::stack
+fn grain(
+    tris: &[usize],
+    triangles: &[[u32; 3]],
+    positions: &[DVec3],
+    direction: DVec3,
+    on_girth_line: &BTreeSet<u32>,
+) -> ((u32, u32), Option<u32>) {
     let nodes: BTreeSet<u32> = tris.iter().flat_map(|&f| triangles[f]).collect();
     let nodes: Vec<u32> = nodes.into_iter().collect();
     let centre = nodes.iter().map(|&v| positions[v as usize]).sum::<DVec3>() / nodes.len().max(1) as f64;
+    let stack = nodes
+        .iter()
+        .copied()
+        .filter(|v| on_girth_line.contains(v))
+        .min_by(|&a, &b| positions[a as usize].distance(centre).total_cmp(&positions[b as usize].distance(centre)));
     let mut best = (f64::MIN, (nodes[0], nodes[nodes.len() - 1]));
     for &a in &nodes {
         for &b in &nodes {
@@ -2448,7 +2505,7 @@ fn grain(tris: &[usize], triangles: &[[u32; 3]], positions: &[DVec3], direction:
             }
         }
     }
-    best.1
+    (best.1, stack)
 }
 
 /// Pieces whose surfaces mirror each other across the body's sagittal
@@ -2588,6 +2645,13 @@ fn lofted(
         })
         .collect();
     girths.sort_by(|a, b| a.walk.centroid.dot(ax.up).total_cmp(&b.walk.centroid.dot(ax.up)));
+    // the top girth's highest point: a node above the top girth's centroid but not above its
+    // loop (a neckline at the back of the neck, where the neck base rises above its centroid)
+    // is lofted between the top two girths too, a little past the upper (height above 1);
+    // left to Eq. (1) it was tied to `chest_back` 170 mm below (its neck points lie too
+    // near their plane for Eq. (1)), and decoded 25 mm inside every men's body
+    let top =
+        girths.last().map_or(f64::MIN, |g| g.walk.loop_.points.iter().map(|q| q.dot(ax.up)).fold(f64::MIN, f64::max));
     let mut out = Vec::new();
     for (i, &p) in positions.iter().enumerate() {
         let node = i as u32;
@@ -2595,9 +2659,16 @@ fn lofted(
             continue;
         }
         let height = p.dot(ax.up);
+        let last = girths.len().saturating_sub(2);
         let Some(k) = girths
             .windows(2)
             .position(|w| w[0].walk.centroid.dot(ax.up) <= height && height <= w[1].walk.centroid.dot(ax.up))
+            .or_else(|| {
+                (girths.len() >= 2
+                    && girths[last + 1].walk.centroid.dot(ax.up) < height
+                    && height <= top + LOFT_ABOVE_TOP_M)
+                    .then_some(last)
+            })
         else {
             continue;
         };
@@ -2847,6 +2918,13 @@ fn solve_between(
     })
 }
 
+/// How far above the top torso girth's highest point a node may still be
+/// lofted between the top two girths ([`lofted`]), m: an eased neckline
+/// lies in the neck base's plane, and at the back of the neck, where that
+/// plane rises, easing it outwards raises it a few millimetres above the
+/// body's loop (3.4 mm for 10 mm out on a plane tilted 20°).
+const LOFT_ABOVE_TOP_M: f64 = 0.01;
+
 /// The girths a garment's section may be a girth line of (method, step 3),
 /// by `ease_mm` name.
 const RING_NAMES: [&str; 8] = ["neck_base", "chest", "bust", "underbust", "waist", "hip", "thigh", "knee"];
@@ -3060,6 +3138,34 @@ mod tests {
         assert_eq!(r[0], DVec3::ZERO);
         assert_eq!(r[4], DVec3::new(1.0, 1.0, 0.0));
         assert!((r[2] - DVec3::X).length() < 1e-12);
+    }
+
+    /// Planted: a 5 × 9 grid of nodes in the plane `z = 0`, 0.1 m apart, the
+    /// body's vertical `+y`; nodes on a "girth line" across its third row from
+    /// the top and its bottom row. The grain runs the piece's whole height
+    /// (top centre to bottom centre); the stack point is the girth-line node
+    /// nearest the grid's middle (the row's centre, not the bottom row's);
+    /// without girth lines, no stack point (the grain's upper end is it).
+    #[test]
+    fn a_piece_stacks_at_its_girth_line_node_nearest_its_middle_and_keeps_a_full_length_grain() {
+        let (cols, rows) = (5u32, 9u32);
+        let positions: Vec<DVec3> =
+            (0..rows).flat_map(|j| (0..cols).map(move |i| DVec3::new(0.1 * i as f64, -0.1 * j as f64, 0.0))).collect();
+        let mut triangles = Vec::new();
+        for j in 0..rows - 1 {
+            for i in 0..cols - 1 {
+                let v = j * cols + i;
+                triangles.push([v, v + 1, v + cols + 1]);
+                triangles.push([v, v + cols + 1, v + cols]);
+            }
+        }
+        let tris: Vec<usize> = (0..triangles.len()).collect();
+        let girth: BTreeSet<u32> = (0..cols).map(|i| 2 * cols + i).chain((0..cols).map(|i| 8 * cols + i)).collect();
+        let (pair, stack) = grain(&tris, &triangles, &positions, DVec3::Y, &girth);
+        assert_eq!(pair, (2, 8 * cols + 2), "top centre to bottom centre");
+        assert_eq!(stack, Some(2 * cols + 2), "the girth row's centre");
+        let (pair, stack) = grain(&tris, &triangles, &positions, DVec3::Y, &BTreeSet::new());
+        assert_eq!((pair, stack), ((2, 8 * cols + 2), None));
     }
 
     #[test]

@@ -387,7 +387,7 @@ impl<'a> Builder<'a> {
     }
 
     fn panel(&mut self, name: &str, triangles: Vec<usize>, grain: (u32, u32)) {
-        self.draft.panels.push(DraftPanel { name: name.to_owned(), triangles, grain, quantity: 1 });
+        self.draft.panels.push(DraftPanel { name: name.to_owned(), triangles, grain, stack: None, quantity: 1 });
     }
 
     fn seam(&mut self, name: &str, a: &str, b: &str, nodes: Vec<u32>) {
