@@ -84,7 +84,12 @@ fn main() {
         }
         let maps = gpu.render(&body.mesh, &RenderOptions::default()).unwrap();
         let obstacle = Obstacle { maps, tree: WindingTree::new(&body.mesh, &WindingOptions::default()) };
-        let g = grade_with_plan(&t, body, Some(&obstacle), &row.size, &GradeOptions::default(), plan.as_ref()).unwrap();
+        // PFLAT=json: the pattern's flattening options (FlattenOptions)
+        let mut go = GradeOptions::default();
+        if let Ok(f) = std::env::var("PFLAT") {
+            go.pattern.flatten = serde_json::from_str(&f).unwrap();
+        }
+        let g = grade_with_plan(&t, body, Some(&obstacle), &row.size, &go, plan.as_ref()).unwrap();
         // POINTS=a,b: body feature points and the garment's nodes on them (cut positions, mm)
         if let Ok(names) = std::env::var("POINTS") {
             for name in names.split(',') {
