@@ -84,6 +84,32 @@ fn main() {
         }
         let maps = gpu.render(&body.mesh, &RenderOptions::default()).unwrap();
         let obstacle = Obstacle { maps, tree: WindingTree::new(&body.mesh, &WindingOptions::default()) };
+        // INSIDE=mm: the template's nodes that decode deeper than that inside this size's body,
+        // with what places them (the ones `refine::clear::clear_coarse` then moves)
+        if let Some(limit) = std::env::var("INSIDE").ok().and_then(|v| v.parse::<f64>().ok()) {
+            let m = grade3d::template::codec::decode(&t, body, t.defaults.relocation).unwrap();
+            let index = grade3d::geom::query::SphereIndex::new(&body.mesh);
+            let mut deep = Vec::new();
+            for (i, &p) in m.positions.iter().enumerate() {
+                if obstacle.tree.is_inside(p) {
+                    let d = index.closest_point(&body.mesh, p).point.distance(p) * 1e3;
+                    if d > limit {
+                        let i32_ = i as u32;
+                        let kind = if t.between.iter().any(|b| b.node == i32_) {
+                            "between"
+                        } else if t.below.iter().any(|b| b.node == i32_) {
+                            "below"
+                        } else if t.on_curve.iter().any(|c| c.node == i32_) {
+                            "on_curve"
+                        } else {
+                            "eq1"
+                        };
+                        deep.push(format!("{i} {kind} {} {d:.1}", t.nodes[i].point));
+                    }
+                }
+            }
+            println!("{} inside by more than {limit} mm: {}", row.size, deep.join("; "));
+        }
         // PFLAT=json: the pattern's flattening options (FlattenOptions)
         let mut go = GradeOptions::default();
         if let Ok(f) = std::env::var("PFLAT") {
