@@ -115,6 +115,14 @@ fn main() {
         if let Ok(f) = std::env::var("PFLAT") {
             go.pattern.flatten = serde_json::from_str(&f).unwrap();
         }
+        // NEG_POWER=k: the seam negotiation's weight power (PatternOptions::negotiation_power)
+        if let Some(k) = std::env::var("NEG_POWER").ok().and_then(|v| v.parse().ok()) {
+            go.pattern.negotiation_power = k;
+        }
+        // FREE_SEAMS=1: each piece flattened on its own, its seams not negotiated
+        if std::env::var("FREE_SEAMS").is_ok() {
+            go.pattern.negotiate_seams = false;
+        }
         let g = grade_with_plan(&t, body, Some(&obstacle), &row.size, &go, plan.as_ref()).unwrap();
         // POINTS=a,b: body feature points and the garment's nodes on them (cut positions, mm)
         if let Ok(names) = std::env::var("POINTS") {
