@@ -159,7 +159,15 @@ fn main() {
             .pattern
             .reports
             .iter()
-            .map(|r| format!("{} {:.2}% [{}]", r.name, r.distortion.strain_p95 * 100.0, r.found_darts.len()))
+            .map(|r| {
+                // FLAT_DETAIL=1: the flattening's iterations, convergence and fallback
+                let detail = if std::env::var("FLAT_DETAIL").is_ok() {
+                    format!(" it{} c{} f{:?}", r.iterations, r.converged, r.fallback)
+                } else {
+                    String::new()
+                };
+                format!("{} {:.2}% [{}]{detail}", r.name, r.distortion.strain_p95 * 100.0, r.found_darts.len())
+            })
             .collect();
         println!("{}: {}", row.size, line.join(", "));
         // COLLISION=1: what the collision steps did (a node pushed out of the arm jumps the grade)
