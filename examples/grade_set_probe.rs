@@ -170,6 +170,15 @@ fn main() {
             })
             .collect();
         println!("{}: {}", row.size, line.join(", "));
+        // SEAMS=piece: the 3D and sewn lengths of that piece's seams (mm)
+        if let Ok(piece) = std::env::var("SEAMS") {
+            for s in g.pattern.seams.iter().filter(|s| s.piece_a == piece || s.piece_b == piece) {
+                println!(
+                    "  {} seam {} ({}+{}): 3D {:.1}, sewn {:.1} / {:.1}",
+                    row.size, s.name, s.piece_a, s.piece_b, s.length_3d_mm, s.length_a_mm, s.length_b_mm
+                );
+            }
+        }
         // COLLISION=1: what the collision steps did (a node pushed out of the arm jumps the grade)
         if std::env::var("COLLISION").is_ok() {
             let c = &g.collision;
