@@ -119,7 +119,7 @@ fn main() {
         if let Some(k) = std::env::var("NEG_POWER").ok().and_then(|v| v.parse().ok()) {
             go.pattern.negotiation_power = k;
         }
-        // FREE_SEAMS=1: each piece flattened on its own, its seams not negotiated
+        // FREE_SEAMS=1: the seams not negotiated: each held at its 3D length
         if std::env::var("FREE_SEAMS").is_ok() {
             go.pattern.negotiate_seams = false;
         }
