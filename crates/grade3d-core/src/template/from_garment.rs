@@ -2650,8 +2650,12 @@ fn lofted(
     // is lofted between the top two girths too, a little past the upper (height above 1);
     // left to Eq. (1) it was tied to `chest_back` 170 mm below (its neck points lie too
     // near their plane for Eq. (1)), and decoded 25 mm inside every men's body
-    let top =
-        girths.last().map_or(f64::MIN, |g| g.walk.loop_.points.iter().map(|q| q.dot(ax.up)).fold(f64::MIN, f64::max));
+    // (the top pair's index, its upper girth's centroid height, the highest height lofted)
+    let top_pair = girths.len().checked_sub(2).map(|last| {
+        let upper = &girths[last + 1].walk;
+        let top = upper.loop_.points.iter().map(|q| q.dot(ax.up)).fold(f64::MIN, f64::max);
+        (last, upper.centroid.dot(ax.up), top + LOFT_ABOVE_TOP_M)
+    });
     let mut out = Vec::new();
     for (i, &p) in positions.iter().enumerate() {
         let node = i as u32;
@@ -2659,16 +2663,10 @@ fn lofted(
             continue;
         }
         let height = p.dot(ax.up);
-        let last = girths.len().saturating_sub(2);
         let Some(k) = girths
             .windows(2)
             .position(|w| w[0].walk.centroid.dot(ax.up) <= height && height <= w[1].walk.centroid.dot(ax.up))
-            .or_else(|| {
-                (girths.len() >= 2
-                    && girths[last + 1].walk.centroid.dot(ax.up) < height
-                    && height <= top + LOFT_ABOVE_TOP_M)
-                    .then_some(last)
-            })
+            .or_else(|| top_pair.and_then(|(last, lo, hi)| (lo < height && height <= hi).then_some(last)))
         else {
             continue;
         };
