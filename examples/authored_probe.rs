@@ -449,7 +449,8 @@ fn print(body: &FeatureBody, name: &str, g: &Graded) {
         }
     }
     if g.collision.surface.pairs_after > 0 {
-        line += &format!(" THROUGH:{}", g.collision.surface.pairs_after);
+        let s = &g.collision.surface;
+        line += &format!(" THROUGH:{} ({} at the thigh contact)", s.pairs_after, s.pairs_after_at_thigh_contact);
     }
     for pair in &g.pattern.cut_pairs {
         let d = &pair.difference;

@@ -6,7 +6,7 @@
 //! steps, and each piece's width per size.
 //!
 //! `cargo run --release --example grade_set_probe -- fixtures/size-charts/mens-36-46-in.csv trousers 42 [hip]`
-//! (`NEST_DETAIL=1`: where consecutive sizes cross; `POINTS=a,b`: feature points
+//! (`NEST_DETAIL=1`: where consecutive sizes cross; `NO_BODY=1`: no collision; `POINTS=a,b`: feature points
 //! and the nodes on them; `COLLISION=1`: what the collision steps did per size)
 
 use std::collections::BTreeMap;
@@ -123,7 +123,9 @@ fn main() {
         if std::env::var("FREE_SEAMS").is_ok() {
             go.pattern.negotiate_seams = false;
         }
-        let g = grade_with_plan(&t, body, Some(&obstacle), &row.size, &go, plan.as_ref()).unwrap();
+        // NO_BODY=1: graded without the body as an obstacle (no collision steps)
+        let obstacle = (std::env::var("NO_BODY").is_err()).then_some(&obstacle);
+        let g = grade_with_plan(&t, body, obstacle, &row.size, &go, plan.as_ref()).unwrap();
         // POINTS=a,b: body feature points and the garment's nodes on them (cut positions, mm)
         if let Ok(names) = std::env::var("POINTS") {
             for name in names.split(',') {

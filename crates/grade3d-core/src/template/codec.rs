@@ -598,8 +598,13 @@ pub fn below_nodes(placements: &[Below], body: &FeatureBody, positions: &mut [DV
         let (Some((loop_, plane, up, leg)), Some(from), Some(to)) = (girth, point(b.from), point(b.to)) else {
             continue;
         };
-        let via = (from + to) * 0.5;
-        let Some((_, p)) = on_curve_point(loop_, plane, (from, to, via), b.fraction, b.radial_m) else { continue };
+        let on_girth = if b.by_angle {
+            super::girth::loop_point_at_angle(loop_, plane, (from, to), b.fraction)
+                .map(|s| super::girth::eased(loop_, s, b.radial_m, plane))
+        } else {
+            on_curve_point(loop_, plane, (from, to, (from + to) * 0.5), b.fraction, b.radial_m).map(|(_, p)| p)
+        };
+        let Some(p) = on_girth else { continue };
         let drop = match leg {
             Some(d) if b.leg_m > 0.0 => b.drop_m * d / b.leg_m,
             _ => b.drop_m,

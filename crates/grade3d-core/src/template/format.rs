@@ -265,6 +265,11 @@ pub struct OnCurve {
     pub normal_m: f64,
 }
 
+/// Whether a flag is off (left out of a document).
+fn is_false(x: &bool) -> bool {
+    !*x
+}
+
 /// Whether an offset is exactly zero (left out of a document).
 fn is_zero(x: &f64) -> bool {
     *x == 0.0
@@ -302,8 +307,18 @@ pub struct Below {
     pub from: PointId,
     /// Feature point on the girth where the arc ends.
     pub to: PointId,
-    /// Fraction of the arc from `from`, in `[0, 1]`.
+    /// Fraction of the arc from `from`, in `[0, 1]` (of the angle, with
+    /// [`Below::by_angle`]).
     pub fraction: f64,
+    /// Whether [`Below::fraction`] divides the angle from `from` to `to`
+    /// (the shorter way) as seen from the bridged girth's centroid within
+    /// its plane, `s` being the loop's point in the direction `θ_from +
+    /// f·Δθ`, rather than the arc length between them: the hem of a skirt
+    /// keeps its direction around the body on a figure whose girth is
+    /// shaped unlike the design body's (authoring sets it,
+    /// [`super::from_garment`]). Default false.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub by_angle: bool,
     /// Outward offset from the bridged girth within its plane, m.
     pub radial_m: f64,
     /// Drop below the girth's plane on the design body, m.

@@ -750,6 +750,72 @@ pub fn expected_ease(t: &Template, body: &FeatureBody, m: &CoarseMesh) -> std::c
     out
 }
 
+/// The arc parameter of the point of the closed loop `loop_` (in `plane`)
+/// in the direction of `p` from the loop's centroid, within the plane.
+pub fn loop_point_towards(loop_: &Polyline, plane: &Plane, p: DVec3) -> Option<f64> {
+    let centre = plane.project(loop_.centroid());
+    let (e1, e2) = plane.basis();
+    let to2 = |q: DVec3| DVec2::new((q - centre).dot(e1), (q - centre).dot(e2));
+    let dir = to2(plane.project(p)).try_normalize()?;
+    let (k, u) = ray_exit(loop_, &to2, dir)?;
+    let (a, b) = loop_.segment(k);
+    Some(loop_.cumulative()[k] + u * a.distance(b))
+}
+
+/// Where the ray from the origin of the plane coordinates `to2` along `dir`
+/// leaves the closed loop `loop_`: the segment it crosses farthest out and
+/// the fraction along it; `None` where it crosses none.
+pub fn ray_exit(loop_: &Polyline, to2: &dyn Fn(DVec3) -> DVec2, dir: DVec2) -> Option<(usize, f64)> {
+    let mut hit: Option<(f64, usize, f64)> = None;
+    for k in 0..loop_.segment_count() {
+        let (a, b) = loop_.segment(k);
+        let (a2, b2) = (to2(a), to2(b));
+        let seg = b2 - a2;
+        let den = dir.perp_dot(seg);
+        if den.abs() < 1e-15 {
+            continue;
+        }
+        let t = a2.perp_dot(seg) / den;
+        let u = a2.perp_dot(dir) / den;
+        if t > 0.0 && (0.0..=1.0).contains(&u) && hit.is_none_or(|(tt, _, _)| t > tt) {
+            hit = Some((t, k, u));
+        }
+    }
+    hit.map(|(_, k, u)| (k, u))
+}
+
+/// The signed angle (radians, in `(−π, π]`) from `a` to `b` as seen from
+/// the centroid of the closed loop `loop_` within `plane`, and the angle of
+/// `a` in the plane's basis; `None` where either lies on the centroid.
+fn angles(loop_: &Polyline, plane: &Plane, a: DVec3, b: DVec3) -> Option<(f64, f64)> {
+    let centre = plane.project(loop_.centroid());
+    let (e1, e2) = plane.basis();
+    let to2 = |q: DVec3| DVec2::new((q - centre).dot(e1), (q - centre).dot(e2));
+    let (a2, b2) = (to2(plane.project(a)).try_normalize()?, to2(plane.project(b)).try_normalize()?);
+    Some((a2.y.atan2(a2.x), a2.perp_dot(b2).atan2(a2.dot(b2))))
+}
+
+/// The fraction `f` of the angle from `from` to `to` (the shorter way) at
+/// which `p` lies, all seen from the centroid of the closed loop `loop_`
+/// within `plane`: `θ(p) = θ(from) + f·Δθ` (a [`crate::template::format::Below`]
+/// placement by angle); `None` where the two points lie in one direction.
+pub fn angle_fraction(loop_: &Polyline, plane: &Plane, (from, to): (DVec3, DVec3), p: DVec3) -> Option<f64> {
+    let (_, span) = angles(loop_, plane, from, to)?;
+    let (_, at) = angles(loop_, plane, from, p)?;
+    (span.abs() > f64::EPSILON).then(|| at / span)
+}
+
+/// The arc parameter of the point of `loop_` at fraction `f` of the angle
+/// from `from` to `to` ([`angle_fraction`]'s inverse): the loop's point in
+/// the direction `θ(from) + f·Δθ` from its centroid.
+pub fn loop_point_at_angle(loop_: &Polyline, plane: &Plane, (from, to): (DVec3, DVec3), fraction: f64) -> Option<f64> {
+    let (theta, span) = angles(loop_, plane, from, to)?;
+    let centre = plane.project(loop_.centroid());
+    let (e1, e2) = plane.basis();
+    let angle = theta + fraction * span;
+    loop_point_towards(loop_, plane, centre + e1 * angle.cos() + e2 * angle.sin())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -762,6 +828,34 @@ mod tests {
             })
             .collect();
         Polyline::new(pts, true)
+    }
+
+    /// Planted: on an oval (30 × 20 cm) with its side point on `+x` and its
+    /// centre point on `+z`, a point in the direction 30° from the side
+    /// lies at a third of the angle between them, whatever its distance from
+    /// the centroid, and the loop's point at a third of the angle is the
+    /// oval's point in that direction (exact up to the polygon's chords);
+    /// the order of the two anchors flips the fraction's complement.
+    #[test]
+    fn a_hang_by_angle_keeps_its_direction_from_the_girths_centroid() {
+        let plane = Plane { normal: DVec3::Y, offset: 1.0 };
+        let (a, b) = (0.15, 0.10);
+        let oval = ellipse(a, b, 3600);
+        let (side, centre) = (DVec3::new(a, 1.0, 0.0), DVec3::new(0.0, 1.0, b));
+        let dir = |deg: f64| DVec3::new(deg.to_radians().cos(), 0.0, deg.to_radians().sin());
+        for reach in [0.05, 0.2, 0.4] {
+            let p = DVec3::new(0.0, 1.0, 0.0) + dir(30.0) * reach;
+            let f = angle_fraction(&oval, &plane, (side, centre), p).expect("a fraction");
+            assert!((f - 1.0 / 3.0).abs() < 1e-9, "{f}");
+            let back = angle_fraction(&oval, &plane, (centre, side), p).expect("a fraction");
+            assert!((back - 2.0 / 3.0).abs() < 1e-9, "{back}");
+        }
+        let s = loop_point_at_angle(&oval, &plane, (side, centre), 1.0 / 3.0).expect("a point");
+        let q = oval.point_at(s) - DVec3::new(0.0, 1.0, 0.0);
+        let deg = q.z.atan2(q.x).to_degrees();
+        assert!((deg - 30.0).abs() < 1e-6, "{deg}°");
+        // on the oval: x²/a² + z²/b² = 1 up to the chords' sag
+        assert!(((q.x / a).powi(2) + (q.z / b).powi(2) - 1.0).abs() < 1e-5);
     }
 
     #[test]
