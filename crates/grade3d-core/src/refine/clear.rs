@@ -364,11 +364,11 @@ pub fn clear_surface(
         // against its corners' vertex normals (the way the lift moves them), where the surface
         // folds over (taken where the crossed part faces along them, below)
         let outward = |t: [VertexId; 3]| {
-            let corners = t.iter().map(|&v| normals[v]).sum::<DVec3>().normalize_or_zero();
-            if own(t).dot(corners) < 0.0 {
+            let (own, corners) = (own(t), t.iter().map(|&v| normals[v]).sum::<DVec3>().normalize_or_zero());
+            if own.dot(corners) < 0.0 {
                 corners
             } else {
-                own(t)
+                own
             }
         };
         // the way a crossed body triangle faces, seen along the garment normal `n`
@@ -394,9 +394,10 @@ pub fn clear_surface(
         for pair in &pairs {
             let tri = triangles[pair.garment];
             let crease = ways.get(&pair.garment).is_some_and(|w| w.0 && w.1);
-            let n = if crease { own(tri) } else { outward(tri) };
+            let own_n = own(tri);
+            let n = if crease { own_n } else { outward(tri) };
             // a fold is lifted out of the part it wraps only (one that faces along its corners)
-            let n = if facing(pair, n) > 0 { n } else { own(tri) };
+            let n = if facing(pair, n) > 0 { n } else { own_n };
             let a = positions[tri[0]];
             let body = tree.face_corners(pair.body);
             let height = |side: f64| body.iter().map(|&v| side * (v - a).dot(n)).fold(0.0f64, f64::max);

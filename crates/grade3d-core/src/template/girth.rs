@@ -750,12 +750,18 @@ pub fn expected_ease(t: &Template, body: &FeatureBody, m: &CoarseMesh) -> std::c
     out
 }
 
+/// Coordinates within `plane` about the closed loop's centroid, in the
+/// plane's basis ([`Plane::basis`]).
+fn in_plane(loop_: &Polyline, plane: &Plane) -> impl Fn(DVec3) -> DVec2 {
+    let centre = plane.project(loop_.centroid());
+    let (e1, e2) = plane.basis();
+    move |q: DVec3| DVec2::new((q - centre).dot(e1), (q - centre).dot(e2))
+}
+
 /// The arc parameter of the point of the closed loop `loop_` (in `plane`)
 /// in the direction of `p` from the loop's centroid, within the plane.
 pub fn loop_point_towards(loop_: &Polyline, plane: &Plane, p: DVec3) -> Option<f64> {
-    let centre = plane.project(loop_.centroid());
-    let (e1, e2) = plane.basis();
-    let to2 = |q: DVec3| DVec2::new((q - centre).dot(e1), (q - centre).dot(e2));
+    let to2 = in_plane(loop_, plane);
     let dir = to2(plane.project(p)).try_normalize()?;
     let (k, u) = ray_exit(loop_, &to2, dir)?;
     let (a, b) = loop_.segment(k);
@@ -788,9 +794,7 @@ pub fn ray_exit(loop_: &Polyline, to2: &dyn Fn(DVec3) -> DVec2, dir: DVec2) -> O
 /// the centroid of the closed loop `loop_` within `plane`, and the angle of
 /// `a` in the plane's basis; `None` where either lies on the centroid.
 fn angles(loop_: &Polyline, plane: &Plane, a: DVec3, b: DVec3) -> Option<(f64, f64)> {
-    let centre = plane.project(loop_.centroid());
-    let (e1, e2) = plane.basis();
-    let to2 = |q: DVec3| DVec2::new((q - centre).dot(e1), (q - centre).dot(e2));
+    let to2 = in_plane(loop_, plane);
     let (a2, b2) = (to2(plane.project(a)).try_normalize()?, to2(plane.project(b)).try_normalize()?);
     Some((a2.y.atan2(a2.x), a2.perp_dot(b2).atan2(a2.dot(b2))))
 }
@@ -810,9 +814,9 @@ pub fn angle_fraction(loop_: &Polyline, plane: &Plane, (from, to): (DVec3, DVec3
 /// the direction `θ(from) + f·Δθ` from its centroid.
 pub fn loop_point_at_angle(loop_: &Polyline, plane: &Plane, (from, to): (DVec3, DVec3), fraction: f64) -> Option<f64> {
     let (theta, span) = angles(loop_, plane, from, to)?;
+    let angle = theta + fraction * span;
     let centre = plane.project(loop_.centroid());
     let (e1, e2) = plane.basis();
-    let angle = theta + fraction * span;
     loop_point_towards(loop_, plane, centre + e1 * angle.cos() + e2 * angle.sin())
 }
 
