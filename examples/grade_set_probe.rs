@@ -207,19 +207,44 @@ fn main() {
     if std::env::var("NOTRUE").is_err() {
         let before = seam_runs(&sizes);
         let b = sizes.iter().position(|(s, _)| *s == base).unwrap();
-        let report = grade3d::pattern::true_up::true_nest(&mut sizes, b, &Default::default());
+        let topts: grade3d::pattern::true_up::TrueOptions =
+            std::env::var("TRUE_OPTS").map(|j| serde_json::from_str(&j).unwrap()).unwrap_or_default();
+        let report = grade3d::pattern::true_up::true_nest(&mut sizes, b, &topts);
         let after = seam_runs(&sizes);
         let worst =
             before.iter().zip(&after).map(|(x, y)| (x.0.clone(), (x.1 - y.1).abs())).max_by(|x, y| x.1.total_cmp(&y.1));
         println!(
-            "trued: {} piece-sizes moved, largest {:.2} mm, {} corners left; worst seam-side length mismatch change {:?}",
+            "trued: {} piece-sizes moved, largest {:.2} mm, {} corners left, as cut {:?}; worst seam-side length mismatch change {:?}",
             report.moved.len(),
             report.largest_move_mm,
             report.left,
+            report.as_cut,
             worst
         );
         for m in &report.moved {
             println!("  trued {} {}: {} corners, {:.2} mm", m.piece, m.size, m.corners, m.moved_mm);
+        }
+    }
+    // STACK=centroid: every piece restacked at its sew line's area centroid (experiment)
+    if std::env::var("STACK").is_ok() {
+        for (_, pieces) in sizes.iter_mut() {
+            for p in pieces.iter_mut() {
+                let n = p.sew_line.len();
+                let (mut a, mut c) = (0.0, glam::DVec2::ZERO);
+                for i in 0..n {
+                    let (u, v) = (p.sew_line[i], p.sew_line[(i + 1) % n]);
+                    let cr = u.perp_dot(v);
+                    a += cr;
+                    c += (u + v) * cr;
+                }
+                let c = c / (3.0 * a);
+                for q in p.sew_line.iter_mut() {
+                    *q -= c;
+                }
+                for g in p.grade_points.iter_mut() {
+                    g.at -= c;
+                }
+            }
         }
     }
     let nest = nests(&sizes).unwrap();

@@ -300,6 +300,40 @@ mod tests {
         assert_eq!(grid.within(DVec3::splat(5e-3), 1e-3 + 1e-12).len(), 7);
     }
 
+    /// `PointGrid::nearest_within` against a brute-force search (the
+    /// symmetrisation's partner search, `refine::symmetry`): on the same
+    /// lattice, the nearest point where it lies within `r` (ties to the lower
+    /// index: a query midway between two lattice points), else none.
+    #[test]
+    fn nearest_within_is_the_brute_force_nearest_within_reach() {
+        let points: Vec<DVec3> = (0..1000)
+            .map(|i| DVec3::new(f64::from(i % 10), f64::from(i / 10 % 10), f64::from(i / 100)) * 1e-3)
+            .collect();
+        let grid = PointGrid::new(&points, 2e-3);
+        let brute = |q: DVec3, r: f64| {
+            (0..points.len())
+                .map(|i| (i, points[i].distance(q)))
+                .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)))
+                .filter(|&(_, d)| d <= r)
+                .map(|(i, _)| i)
+        };
+        for k in 0..200 {
+            let t = f64::from(k);
+            let q = DVec3::new(
+                (t * 0.37).rem_euclid(11.0) - 0.5,
+                (t * 0.61).rem_euclid(11.0) - 0.5,
+                (t * 0.23).rem_euclid(11.0) - 0.5,
+            ) * 1e-3;
+            for r in [0.3e-3, 1e-3, 2e-3] {
+                assert_eq!(grid.nearest_within(q, r), brute(q, r), "{q} {r}");
+            }
+        }
+        // midway between lattice points 0 and 1: the lower index
+        assert_eq!(grid.nearest_within(DVec3::new(0.5e-3, 0.0, 0.0), 1e-3), Some(0));
+        // beyond reach of every point
+        assert_eq!(grid.nearest_within(DVec3::splat(-5e-3), 2e-3), None);
+    }
+
     #[test]
     fn closest_on_triangle_regions() {
         let (a, b, c) = (DVec3::ZERO, DVec3::X, DVec3::Y);

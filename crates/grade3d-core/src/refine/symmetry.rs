@@ -55,6 +55,7 @@ use typed_index_collections::{TiSlice, TiVec};
 use crate::body::feature::FeatureBody;
 use crate::geom::mesh::{FaceId, VertexId};
 use crate::geom::plane::Plane;
+use crate::geom::query::PointGrid;
 use crate::refine::lineage::node_vertex;
 use crate::template::format::Template;
 
@@ -62,6 +63,10 @@ use crate::template::format::Template;
 /// triangles at the crotch) a partner may not be mutual; each pass halves
 /// the asymmetry there and the partners become mutual.
 const SYMMETRY_PASSES: usize = 4;
+
+/// The smallest cell of the nearest-partner grid, m (a vertex tolerance of
+/// zero still hashes finitely).
+const MIN_CELL_M: f64 = 1e-9;
 
 /// Knobs of the symmetrisation.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -143,24 +148,15 @@ pub fn symmetrize(
             return Some(positions.iter().zip(&partner).map(|(&p, &w)| 0.5 * (p + mirror(positions[w]))).collect());
         }
     }
-    // nearest mirror images: a search over positions, in the positions' own order
-    let tol2 = (opts.vertex_tolerance_mm * 1e-3).powi(2);
+    // nearest mirror images within the tolerance (ties to the lower index), found in a grid of
+    // that cell size: the nearest of all where it lies within the tolerance, in linear time (a
+    // search over every vertex took a fifth of a princess dress's grade)
+    let tol = opts.vertex_tolerance_mm * 1e-3;
     let mut out = positions.raw.to_vec();
     for _ in 0..SYMMETRY_PASSES {
-        let nearest = |q: DVec3| -> (usize, f64) {
-            out.iter()
-                .enumerate()
-                .map(|(i, p)| (i, p.distance_squared(q)))
-                .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)))
-                .unwrap_or((0, f64::INFINITY))
-        };
-        let partner: Vec<usize> = out
-            .iter()
-            .map(|&p| {
-                let (w, d2) = nearest(mirror(p));
-                (d2 <= tol2).then_some(w)
-            })
-            .collect::<Option<Vec<usize>>>()?;
+        let grid = PointGrid::new(&out, tol.max(MIN_CELL_M));
+        let partner: Vec<usize> =
+            out.iter().map(|&p| grid.nearest_within(mirror(p), tol)).collect::<Option<Vec<usize>>>()?;
         let mutual = partner.iter().enumerate().all(|(v, &w)| partner[w] == v);
         out = out.iter().zip(&partner).map(|(&p, &w)| 0.5 * (p + mirror(out[w]))).collect();
         if mutual {
@@ -213,34 +209,65 @@ fn partners_by_topology(
         next[a].push(b);
         next[b].push(a);
     }
+    for n in next.iter_mut() {
+        n.sort_unstable();
+        n.dedup();
+    }
+    // the triangles at each vertex: where a vertex gets its partner, only they can pair another
+    let mut at: TiVec<VertexId, Vec<FaceId>> = TiVec::from(vec![Vec::new(); vertices]);
+    for (f, tri) in top.triangles.iter_enumerated() {
+        for &v in tri {
+            at[v].push(f);
+        }
+    }
+    // paired vertices with an unpaired neighbour, for the step below when nothing spreads
+    let mut frontier: std::collections::BTreeSet<VertexId> = std::collections::BTreeSet::new();
+    let open = |partner: &TiVec<VertexId, Option<VertexId>>, v: VertexId| next[v].iter().any(|&u| partner[u].is_none());
+    let mut queue: std::collections::VecDeque<FaceId> = std::collections::VecDeque::new();
+    let paired = |partner: &TiVec<VertexId, Option<VertexId>>,
+                  frontier: &mut std::collections::BTreeSet<VertexId>,
+                  queue: &mut std::collections::VecDeque<FaceId>,
+                  v: VertexId| {
+        queue.extend(at[v].iter().copied());
+        if open(partner, v) {
+            frontier.insert(v);
+        }
+        for &u in &next[v] {
+            if partner[u].is_some() && !open(partner, u) {
+                frontier.remove(&u);
+            }
+        }
+    };
+    let seeds: Vec<VertexId> = partner.iter_enumerated().filter(|(_, p)| p.is_some()).map(|(v, _)| v).collect();
+    for v in seeds {
+        paired(&partner, &mut frontier, &mut queue, v);
+    }
     loop {
-        let mut changed = false;
-        for &[a, b, c] in top.triangles {
+        // spread: a triangle with two paired corners pairs its third (the mirror reverses
+        // orientation: x→y maps to m(y)→m(x)); every triangle is looked at again after any of its
+        // corners is paired, so the result is that of sweeping every triangle until none changes
+        while let Some(f) = queue.pop_front() {
+            let [a, b, c] = top.triangles[f];
             for (x, y, z) in [(a, b, c), (b, c, a), (c, a, b)] {
                 let (Some(px), Some(py)) = (partner[x], partner[y]) else { continue };
-                // the mirror reverses orientation: x→y maps to m(y)→m(x)
                 let &mz = third.get(&(py, px))?;
                 match partner[z] {
                     Some(known) if known != mz => return None,
                     Some(_) => {}
                     None => {
                         partner[z] = Some(mz);
-                        changed = true;
+                        paired(&partner, &mut frontier, &mut queue, z);
                     }
                 }
             }
         }
-        if changed {
-            continue;
-        }
         // no triangle has two paired corners: pair one neighbour `u` of a paired
-        // vertex `v` with the neighbour of m(v) nearest u's mirror image (a choice
-        // among a handful of vertices 10–30 mm apart), and spread from that edge
-        let Some((u, v)) = partner.iter_enumerated().find_map(|(v, pv)| {
-            pv.as_ref()?;
-            next[v].iter().find(|&&u| partner[u].is_none()).map(|&u| (u, v))
-        }) else {
-            break;
+        // vertex `v` (the first such `v`) with the neighbour of m(v) nearest u's mirror
+        // image (a choice among a handful of vertices 10–30 mm apart), and spread from that edge
+        let Some(&v) = frontier.iter().next() else { break };
+        let Some(&u) = next[v].iter().find(|&&u| partner[u].is_none()) else {
+            frontier.remove(&v);
+            continue;
         };
         let mv = partner[v]?;
         let target = mirror(positions[u]);
@@ -249,6 +276,7 @@ fn partners_by_topology(
             .copied()
             .min_by(|&a, &b| positions[a].distance(target).total_cmp(&positions[b].distance(target)))?;
         partner[u] = Some(pick);
+        paired(&partner, &mut frontier, &mut queue, u);
     }
     let partner: TiVec<VertexId, VertexId> = partner.into_iter().collect::<Option<_>>()?;
     partner.iter_enumerated().all(|(v, &w)| partner[w] == v).then_some(partner)
