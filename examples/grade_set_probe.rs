@@ -38,8 +38,15 @@ fn main() {
     // `live:shift-dress`: the princess dress authored here, as the library would hold it
     let t = if which == "live:shift-dress" {
         let design = grade3d::template::library::reference_body().unwrap();
-        grade3d::template::drawn::shift_dress(&design, &grade3d::template::drawn::ShiftDressOptions::princess())
-            .unwrap()
+        // DOPTS=json: ShiftDressOptions over the library's (princess) ones
+        let mut o = serde_json::to_value(grade3d::template::drawn::ShiftDressOptions::princess()).unwrap();
+        if let Ok(j) = std::env::var("DOPTS") {
+            let extra: serde_json::Value = serde_json::from_str(&j).unwrap();
+            for (k, v) in extra.as_object().unwrap() {
+                o[k] = v.clone();
+            }
+        }
+        grade3d::template::drawn::shift_dress(&design, &serde_json::from_value(o).unwrap()).unwrap()
     } else {
         builtin().unwrap().into_iter().find(|t| t.name.contains(which.as_str())).unwrap()
     };
