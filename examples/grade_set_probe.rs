@@ -213,6 +213,7 @@ fn main() {
     // NOTRUE=1: the nest as cut, not trued at its corners
     if std::env::var("NOTRUE").is_err() {
         let before = seam_runs(&sizes);
+        let cut = sizes.clone();
         let b = sizes.iter().position(|(s, _)| *s == base).unwrap();
         let topts: grade3d::pattern::true_up::TrueOptions =
             std::env::var("TRUE_OPTS").map(|j| serde_json::from_str(&j).unwrap()).unwrap_or_default();
@@ -229,7 +230,18 @@ fn main() {
             worst
         );
         for m in &report.moved {
-            println!("  trued {} {}: {} corners, {:.2} mm", m.piece, m.size, m.corners, m.moved_mm);
+            // the grade point truing moved the most in that piece and size
+            let most = cut
+                .iter()
+                .zip(&sizes)
+                .filter(|((s, _), _)| *s == m.size)
+                .flat_map(|((_, a), (_, b))| a.iter().zip(b).filter(|(p, _)| p.name == m.piece))
+                .flat_map(|(p, q)| {
+                    p.grade_points.iter().zip(&q.grade_points).map(|(g, h)| (g.label.clone(), g.at.distance(h.at)))
+                })
+                .max_by(|x, y| x.1.total_cmp(&y.1))
+                .map_or(String::new(), |(l, d)| format!("; most at {l} ({d:.2} mm)"));
+            println!("  trued {} {}: {} corners, {:.2} mm{most}", m.piece, m.size, m.corners, m.moved_mm);
         }
     }
     // STACK=centroid: every piece restacked at its sew line's area centroid (experiment)
