@@ -285,9 +285,7 @@ mod tests {
     /// lattice 1 mm apart, queries off the lattice, radius up to the cell.
     #[test]
     fn point_grid_within_finds_what_brute_force_finds() {
-        let points: Vec<DVec3> = (0..1000)
-            .map(|i| DVec3::new(f64::from(i % 10), f64::from(i / 10 % 10), f64::from(i / 100)) * 1e-3)
-            .collect();
+        let points = lattice();
         let grid = PointGrid::new(&points, 2e-3);
         for (q, r) in [(DVec3::splat(4.3e-3), 2e-3), (DVec3::new(0.2e-3, 9.1e-3, 5.5e-3), 1.5e-3), (DVec3::ZERO, 1e-3)]
         {
@@ -306,9 +304,7 @@ mod tests {
     /// index: a query midway between two lattice points), else none.
     #[test]
     fn nearest_within_is_the_brute_force_nearest_within_reach() {
-        let points: Vec<DVec3> = (0..1000)
-            .map(|i| DVec3::new(f64::from(i % 10), f64::from(i / 10 % 10), f64::from(i / 100)) * 1e-3)
-            .collect();
+        let points = lattice();
         let grid = PointGrid::new(&points, 2e-3);
         let brute = |q: DVec3, r: f64| {
             (0..points.len())
@@ -332,6 +328,11 @@ mod tests {
         assert_eq!(grid.nearest_within(DVec3::new(0.5e-3, 0.0, 0.0), 1e-3), Some(0));
         // beyond reach of every point
         assert_eq!(grid.nearest_within(DVec3::splat(-5e-3), 2e-3), None);
+    }
+
+    /// A 10 × 10 × 10 lattice of points 1 mm apart, metres.
+    fn lattice() -> Vec<DVec3> {
+        (0..1000).map(|i| DVec3::new(f64::from(i % 10), f64::from(i / 10 % 10), f64::from(i / 100)) * 1e-3).collect()
     }
 
     #[test]
