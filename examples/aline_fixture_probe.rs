@@ -6,21 +6,20 @@
 //!
 //! `cargo run --release --example aline_fixture_probe -- size-12`
 
-use std::path::Path;
-
 use grade3d::body::derive::{derive_features, DeriveOptions};
 use grade3d::collide::cache::Obstacle;
 use grade3d::collide::render::{RenderOptions, Renderer, RendererChoice};
 use grade3d::collide::DepthRenderer;
 use grade3d::geom::query::SphereIndex;
 use grade3d::geom::winding::{WindingOptions, WindingTree};
-use grade3d::io::gltf::{read_mesh, GltfReadOptions};
-use grade3d::io::landmarks::parse_landmarks;
 use grade3d::io::obj::read_obj_panels;
 use grade3d::pattern::garment::DartSource;
 use grade3d::pipeline::{block, grade_with_darts, GradeOptions};
 use grade3d::template::codec::decode;
 use grade3d::template::from_garment::author_from_garment;
+
+#[path = "../tests/common/mod.rs"]
+mod common;
 
 fn main() {
     let filter = std::env::args().nth(1).unwrap_or_else(|| "size-12".into());
@@ -34,20 +33,8 @@ fn main() {
     let a = author_from_garment("a-line-skirt", &read, &body, &grade3d::template::drawn::garment_options()).unwrap();
     let t = a.template;
     let plan = block(&t, &body, Some(&obstacle(&body.mesh)), &GradeOptions::default()).unwrap();
-    for sub in ["bodies", "astm"] {
-        let dir = Path::new("fixtures").join(sub);
-        let mut names: Vec<String> = std::fs::read_dir(&dir)
-            .unwrap()
-            .filter_map(|e| e.ok()?.file_name().into_string().ok())
-            .filter_map(|n| n.strip_suffix(".glb").map(str::to_owned))
-            .filter(|n| n.contains(filter.as_str()))
-            .collect();
-        names.sort();
-        for n in names {
-            let mesh =
-                read_mesh(&std::fs::read(dir.join(format!("{n}.glb"))).unwrap(), &GltfReadOptions::default()).unwrap();
-            let lm =
-                parse_landmarks(&std::fs::read_to_string(dir.join(format!("{n}.landmarks.json"))).unwrap()).unwrap();
+    for (n, mesh, lm) in common::fixture_bodies().into_iter().filter(|(n, ..)| n.contains(filter.as_str())) {
+        {
             let fb = derive_features(mesh, &lm, &DeriveOptions::default()).unwrap();
             let o = obstacle(&fb.mesh);
             // the gap between the left arm and the trunk, per level (mm)
@@ -73,7 +60,7 @@ fn main() {
             }
             let g =
                 grade_with_darts(&t, &fb, Some(&o), &n, &GradeOptions::default(), DartSource::Block(&plan)).unwrap();
-            println!("{sub}/{n}: {:?}", g.collision.surface);
+            println!("{n}: {:?}", g.collision.surface);
             let pairs = grade3d::geom::intersect::intersecting_pairs(&o.tree, &g.mesh.positions, &g.mesh.triangles);
             for pr in pairs.iter().take(30) {
                 let t3 = g.mesh.triangles[pr.garment];

@@ -1552,7 +1552,6 @@ mod tests {
     use crate::template::format::Relocation;
     use crate::template::library::{builtin, reference_body};
 
-    /// The built-in skirt with only its two back darts, and with none.
     /// `t` decoded on the reference body and refined (default options).
     fn refined_on_reference(t: &Template) -> (RefineMesh, crate::refine::lineage::Lineage) {
         let body = reference_body().expect("reference body");
@@ -1563,6 +1562,19 @@ mod tests {
         (mesh, lineage)
     }
 
+    /// The built-in trousers refined on the reference body, and pattern
+    /// options without found darts.
+    fn trousers_without_found_darts() -> (Template, RefineMesh, crate::refine::lineage::Lineage, PatternOptions) {
+        let t = builtin().expect("library").into_iter().find(|t| t.name == "trousers").expect("trousers");
+        let (fine, lineage) = refined_on_reference(&t);
+        let plain = PatternOptions {
+            auto_darts: AutoDartOptions { enabled: false, ..Default::default() },
+            ..Default::default()
+        };
+        (t, fine, lineage, plain)
+    }
+
+    /// The built-in skirt with only its two back darts, and with none.
     fn skirts() -> (Template, Template) {
         let mut t = builtin().expect("library").remove(0);
         t.darts.retain(|d| d.panel == "back");
@@ -1608,12 +1620,7 @@ mod tests {
     /// plan records its negotiated ratios (sewn over 3D, one per segment).
     #[test]
     fn a_carried_plan_sews_each_seam_at_its_3d_length_times_the_base_ratio() {
-        let t = builtin().expect("library").into_iter().find(|t| t.name == "trousers").expect("trousers");
-        let (fine, lineage) = refined_on_reference(&t);
-        let plain = PatternOptions {
-            auto_darts: AutoDartOptions { enabled: false, ..Default::default() },
-            ..Default::default()
-        };
+        let (t, fine, lineage, plain) = trousers_without_found_darts();
         let run = |plan: Option<&DartPlan>| {
             pattern_with_plan(&t, &fine.positions, &fine.triangles, &lineage, "ref", &plain, plan).expect("pattern")
         };
@@ -1634,12 +1641,7 @@ mod tests {
 
     #[test]
     fn negotiated_seams_match_on_both_sides_and_strain_less() {
-        let t = builtin().expect("library").into_iter().find(|t| t.name == "trousers").expect("trousers");
-        let (fine, lineage) = refined_on_reference(&t);
-        let plain = PatternOptions {
-            auto_darts: AutoDartOptions { enabled: false, ..Default::default() },
-            ..Default::default()
-        };
+        let (t, fine, lineage, plain) = trousers_without_found_darts();
         let held = PatternOptions { negotiate_seams: false, ..plain };
         let run =
             |o: &PatternOptions| pattern(&t, &fine.positions, &fine.triangles, &lineage, "ref", o).expect("pattern");

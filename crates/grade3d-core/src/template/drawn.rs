@@ -555,7 +555,7 @@ pub fn shift_dress_curves(body: &FeatureBody, o: &ShiftDressOptions) -> Result<V
         }
         let ring = d.ring(curve, ease)?;
         let mut sides = d.sides(&ring, l, r)?;
-        if curve == CurveId::Chest && o.chest_side_to_bust != 0.0 {
+        if curve == CurveId::Chest {
             // towards the bust's side points' angles, seen from the chest's own centre
             let bust = d.sides(&ring, PointId::BustLeft, PointId::BustRight)?;
             let f = o.chest_side_to_bust;
